@@ -1,0 +1,319 @@
+"""Compile loaded mods into the dense tables the kernel reads.
+
+Element ids are ``mod:element``. Numeric ids are given here, in a fixed order
+(``base:empty`` is 0, then the ids sorted), and never written into files.
+Reactions become an n x n interaction matrix (what each cell of a touching
+pair becomes, and the chance per frame); densities and archetypes become a
+displacement matrix (which element may swap into which).
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+from typing import NamedTuple, Sequence
+
+import numpy as np
+
+from .errors import Problem, ProblemsError
+from .hashing import chance_threshold
+from .modset import BASE_MOD, LoadedMod
+from .modspec import EMPTY_ID, Element, Reaction
+from .tomlsource import TomlSource
+
+#: Archetype codes as the kernel knows them.
+ARCHETYPE_CODES = {"empty": 0, "static": 1, "powder": 2, "liquid": 3, "gas": 4}
+#: Most elements a ruleset may hold (palette renders use 256 colours).
+MAX_ELEMENTS = 256
+
+
+class Tables(NamedTuple):
+    """Per-element parameters and pair matrices, indexed by numeric element id."""
+
+    archetype: np.ndarray  # uint8[n]: ARCHETYPE_CODES
+    gravity: np.ndarray  # int8[n]: +1 falls, -1 rises, 0 stays
+    dispersion: np.ndarray  # uint8[n]: cells sideways per frame (liquids, gases)
+    rest_chance: np.ndarray  # uint32[n]: roll threshold to rest a frame (viscosity)
+    life_frames: np.ndarray  # uint16[n]: frames before decay, 0 = forever
+    life_jitter: np.ndarray  # uint16[n]: extra frames, chosen per cell
+    life_into: np.ndarray  # uint16[n]: what a cell decays into
+    reactive: np.ndarray  # uint8[n]: 1 if any reaction involves the element
+    displace: np.ndarray  # uint8[n, n]: a moving cell of a may swap with a cell of b
+    react_chance: np.ndarray  # uint32[n, n]: roll threshold per frame of contact
+    react_into_a: np.ndarray  # uint16[n, n]: what a becomes
+    react_into_b: np.ndarray  # uint16[n, n]: what b becomes
+
+
+@dataclass(frozen=True)
+class ElementInfo:
+    """One compiled element."""
+
+    index: int
+    id: str
+    spec: Element
+    source: TomlSource
+    defined_by: str  # the mod whose definition is in force
+    overrides: tuple[str, ...] = ()  # mods whose earlier definitions it replaced
+
+    @property
+    def mod(self) -> str:
+        return self.id.split(":", 1)[0]
+
+    @property
+    def name(self) -> str:
+        return self.id.split(":", 1)[1]
+
+
+@dataclass(frozen=True)
+class CompiledReaction:
+    """A reaction with its selectors resolved, for listing."""
+
+    mod: str
+    spec: Reaction
+    a: tuple[str, ...]
+    b: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Ruleset:
+    """Everything the engine knows about the loaded elements."""
+
+    mods: tuple[LoadedMod, ...]
+    elements: tuple[ElementInfo, ...]
+    reactions: tuple[CompiledReaction, ...]
+    tables: Tables
+    palette: bytes  # 768 bytes, 256 RGB triples
+    color_lut: np.ndarray  # uint8[n, shades]: palette index per element and shade bucket
+    _ids: dict[str, int] = field(default_factory=dict, repr=False)
+
+    @property
+    def shades(self) -> int:
+        return self.color_lut.shape[1]
+
+    def index(self, ref: str) -> int:
+        """The numeric id of ``ref`` ('sand' or 'sand:sand'); KeyError with a message if unknown."""
+        found, message = _resolve(ref, None, self._ids)
+        if found is None:
+            raise KeyError(message)
+        return self._ids[found]
+
+
+def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
+    """Compile mods (in load order) into a :class:`Ruleset`; ProblemsError lists every mistake."""
+    problems: list[Problem] = []
+    defs = _collect_elements(mods, problems)
+    if EMPTY_ID not in defs:
+        problems.append(Problem("mods", None, "", f"no element '{EMPTY_ID}' is defined"))
+    if problems:
+        raise ProblemsError(problems)
+    order = [EMPTY_ID] + sorted(i for i in defs if i != EMPTY_ID)
+    if len(order) > MAX_ELEMENTS:
+        raise ProblemsError([Problem("mods", None, "", f"{len(order)} elements loaded; at most {MAX_ELEMENTS}")])
+    ids = {element_id: i for i, element_id in enumerate(order)}
+    elements = tuple(
+        ElementInfo(ids[eid], eid, d.spec, d.source, d.mod, tuple(d.replaced)) for eid, d in ((e, defs[e]) for e in order)
+    )
+    by_mod = {m.name: m for m in mods}
+
+    def resolve(ref: str, mod: LoadedMod, loc: tuple) -> int | None:
+        found, message = _resolve(ref, mod.name, ids)
+        if found is None:
+            problems.append(mod.source.problem(loc, message))
+            return None
+        owner = found.split(":", 1)[0]
+        if owner not in (mod.name, BASE_MOD) and owner not in mod.spec.mod.requires:
+            problems.append(mod.source.problem(loc, f"'{found}' is from mod '{owner}'; add '{owner}' to mod.requires"))
+            return None
+        return ids[found]
+
+    n = len(order)
+    t = _empty_tables(n)
+    air_density = elements[0].spec.density
+    densities = np.zeros(n)
+    for info in elements:
+        spec, i = info.spec, info.index
+        d = defs[info.id]
+        t.archetype[i] = ARCHETYPE_CODES[spec.archetype]
+        densities[i] = getattr(spec, "density", np.inf)
+        if spec.archetype in ("powder", "liquid"):
+            t.gravity[i] = 1
+        elif spec.archetype == "gas":
+            t.gravity[i] = 1 if spec.density > air_density else -1
+        t.dispersion[i] = getattr(spec, "dispersion", 0)
+        t.rest_chance[i] = chance_threshold(getattr(spec, "viscosity", 0.0))
+        if spec.archetype == "empty" and info.id != EMPTY_ID:
+            problems.append(d.source.problem(d.loc + ("archetype",), f"only '{EMPTY_ID}' may be 'empty'"))
+        if spec.lifetime is not None:
+            into = resolve(spec.lifetime.becomes, by_mod[d.mod], d.loc + ("lifetime", "becomes"))
+            if into is not None:
+                t.life_frames[i] = spec.lifetime.frames
+                t.life_jitter[i] = spec.lifetime.jitter
+                t.life_into[i] = into
+    fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("empty", "liquid", "gas")])
+    for a in range(1, n):
+        if t.gravity[a] == 0:
+            continue
+        lighter = densities < densities[a] if t.gravity[a] > 0 else densities > densities[a]
+        t.displace[a] = fluid & lighter
+        t.displace[a, a] = 0
+    reactions = _compile_reactions(mods, elements, ids, t, resolve, problems)
+    if problems:
+        raise ProblemsError(problems)
+    palette, lut = _palette(elements)
+    return Ruleset(tuple(mods), elements, reactions, t, palette, lut, ids)
+
+
+@dataclass
+class _Definition:
+    spec: Element
+    source: TomlSource
+    mod: str
+    loc: tuple
+    replaced: list[str] = field(default_factory=list)
+
+
+def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dict[str, _Definition]:
+    defs: dict[str, _Definition] = {}
+    for mod in mods:
+        for key, spec in mod.spec.elements.items():
+            loc = ("elements", key)
+            element_id = key if ":" in key else f"{mod.name}:{key}"
+            previous = defs.get(element_id)
+            foreign = element_id.split(":", 1)[0] != mod.name
+            if previous is None:
+                if spec.override or foreign:
+                    what = "nothing to override" if spec.override else "an element of another mod needs override = true"
+                    problems.append(mod.source.problem(loc, f"'{element_id}' is not defined by any loaded mod ({what})"))
+                    continue
+                defs[element_id] = _Definition(spec, mod.source, mod.name, loc)
+            elif not spec.override:
+                problems.append(
+                    mod.source.problem(
+                        loc, f"'{element_id}' is already defined by {previous.source.name}; set override = true to replace it"
+                    )
+                )
+            else:
+                defs[element_id] = _Definition(spec, mod.source, mod.name, loc, previous.replaced + [previous.mod])
+    return defs
+
+
+def _resolve(ref: str, mod: str | None, ids: dict[str, int]) -> tuple[str | None, str]:
+    """Resolve an element reference; returns (id, "") or (None, message)."""
+    if ":" in ref:
+        if ref in ids:
+            return ref, ""
+        candidates = list(ids)
+    else:
+        if mod is not None and f"{mod}:{ref}" in ids:
+            return f"{mod}:{ref}", ""
+        matches = [i for i in ids if i.split(":", 1)[1] == ref]
+        if len(matches) == 1:
+            return matches[0], ""
+        if matches:
+            return None, f"'{ref}' is ambiguous; write one of: {', '.join(sorted(matches))}"
+        candidates = sorted({i.split(":", 1)[1] for i in ids})
+    close = difflib.get_close_matches(ref, candidates, n=1)
+    return None, f"unknown element '{ref}'" + (f" (did you mean '{close[0]}'?)" if close else "")
+
+
+def _empty_tables(n: int) -> Tables:
+    return Tables(
+        archetype=np.zeros(n, np.uint8),
+        gravity=np.zeros(n, np.int8),
+        dispersion=np.zeros(n, np.uint8),
+        rest_chance=np.zeros(n, np.uint32),
+        life_frames=np.zeros(n, np.uint16),
+        life_jitter=np.zeros(n, np.uint16),
+        life_into=np.zeros(n, np.uint16),
+        reactive=np.zeros(n, np.uint8),
+        displace=np.zeros((n, n), np.uint8),
+        react_chance=np.zeros((n, n), np.uint32),
+        react_into_a=np.zeros((n, n), np.uint16),
+        react_into_b=np.zeros((n, n), np.uint16),
+    )
+
+
+def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tuple[set[int], int] | None:
+    """The element indices a selector matches, and how specific it is (3 name, 2 tag, 1 broad)."""
+    negate = selector.startswith("!")
+    term = selector[1:] if negate else selector
+    non_empty = {e.index for e in elements if e.index != 0}
+    if term == "*":
+        matched, score = set(non_empty), 1
+    elif term.startswith("#"):
+        matched, score = {e.index for e in elements if term[1:] in e.spec.tags}, 2
+    else:
+        index = resolve_one(term)
+        if index is None:
+            return None
+        matched, score = {index}, 3
+    return (non_empty - matched, 1) if negate else (matched, score)
+
+
+def _compile_reactions(mods, elements, ids, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
+    winner: dict[tuple[int, int], tuple[int, LoadedMod, int]] = {}  # pair -> (score, mod, reaction number)
+    compiled: list[CompiledReaction] = []
+    for mod in mods:
+        for number, reaction in enumerate(mod.spec.reactions):
+            loc = ("reactions", number)
+            side_a = _select(reaction.a, elements, lambda r: resolve(r, mod, loc + ("a",)))
+            side_b = _select(reaction.b, elements, lambda r: resolve(r, mod, loc + ("b",)))
+            into_a = None if reaction.a_becomes is None else resolve(reaction.a_becomes, mod, loc + ("a_becomes",))
+            into_b = None if reaction.b_becomes is None else resolve(reaction.b_becomes, mod, loc + ("b_becomes",))
+            if side_a is None or side_b is None or (reaction.a_becomes and into_a is None) or (reaction.b_becomes and into_b is None):
+                continue
+            (set_a, score_a), (set_b, score_b) = side_a, side_b
+            score = score_a + score_b
+            threshold = chance_threshold(reaction.chance)
+            for i in sorted(set_a):
+                for j in sorted(set_b):
+                    out_i = i if into_a is None else into_a
+                    out_j = j if into_b is None else into_b
+                    entries = [((i, j), out_i, out_j)] + ([((j, i), out_j, out_i)] if i != j else [])
+                    for pair, first, second in entries:
+                        held = winner.get(pair)
+                        same = (t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair]) == (first, second, threshold)
+                        if held is not None and held[0] > score:
+                            continue
+                        if held is not None and held[0] == score and not same:
+                            earlier = held[1].source.problem(("reactions", held[2]), "")
+                            problems.append(
+                                mod.source.problem(
+                                    loc,
+                                    f"{elements[pair[0]].id} + {elements[pair[1]].id} also reacts differently at "
+                                    f"{earlier.file}:{earlier.line} ({earlier.path}); make one selector more specific",
+                                )
+                            )
+                            continue
+                        winner[pair] = (score, mod, number)
+                        t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
+            compiled.append(
+                CompiledReaction(
+                    mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
+                )
+            )
+    involved = (t.react_chance > 0).any(axis=1)
+    t.reactive[:] = involved
+    return tuple(compiled)
+
+
+def _hex_rgb(color: str) -> tuple[int, int, int]:
+    return int(color[1:3], 16), int(color[3:5], 16), int(color[5:7], 16)
+
+
+def _palette(elements: Sequence[ElementInfo]) -> tuple[bytes, np.ndarray]:
+    """One shared 256-colour palette: each element gets ``shades`` entries."""
+    shades = max(1, min(8, 256 // len(elements)))
+    palette = np.zeros((256, 3), np.uint8)
+    lut = np.zeros((len(elements), shades), np.uint8)
+    for info in elements:
+        colors = [_hex_rgb(c) for c in info.spec.color]
+        levels = -(-shades // len(colors))
+        for j in range(shades):
+            rgb = np.array(colors[j % len(colors)], float)
+            v = ((j // len(colors)) + 0.5) / levels  # spread across (0, 1)
+            factor = 1.0 + info.spec.shade * (2.0 * v - 1.0)
+            entry = info.index * shades + j
+            palette[entry] = np.clip(np.round(rgb * factor), 0, 255)
+            lut[info.index, j] = entry
+    return palette.tobytes(), lut

@@ -1,0 +1,72 @@
+"""The plugin API: every hook sandmod calls, typed and documented.
+
+A plugin is a module or object with functions named after these hooks and
+marked with :data:`hookimpl`. Third-party plugins are found through the
+``sandmod`` entry-point group::
+
+    [project.entry-points.sandmod]
+    my_plugin = "my_package.plugin"
+
+Every hook receives a ``register`` callback. Call it once per thing you
+provide; sandmod checks the value at once and remembers which plugin gave it
+(shown by ``sandmod list``). Hooks return nothing.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Mapping
+
+import pluggy
+
+if TYPE_CHECKING:
+    from .recording import RecorderSpec
+    from .tomlsource import TomlSource
+
+PROJECT = "sandmod"
+
+hookspec = pluggy.HookspecMarker(PROJECT)
+#: Mark a plugin's hook implementations with this.
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+#: Reads one mod file into its data and key positions.
+ModLoader = Callable[[Path], "TomlSource"]
+
+
+@hookspec
+def register_mod_dirs(register: Callable[[Path], None]) -> None:
+    """Add folders to search for mod files.
+
+    ``register(path)`` takes an existing directory. Every file in it whose
+    suffix has a loader (see :func:`register_mod_loaders`) is a mod.
+    """
+
+
+@hookspec
+def register_mod_loaders(register: Callable[[str, ModLoader], None]) -> None:
+    """Teach sandmod to read mod files of another format.
+
+    ``register(suffix, load)``: ``suffix`` like ``".toml"``; ``load(path)``
+    returns a :class:`~sandmod.tomlsource.TomlSource` (the parsed data and
+    the line of each key) or raises :class:`~sandmod.errors.ProblemsError`.
+    """
+
+
+@hookspec
+def register_mods(register: Callable[[Mapping[str, Any], str], None]) -> None:
+    """Add mods built in Python rather than read from a file.
+
+    ``register(data, origin)``: ``data`` has the same shape as a mod file
+    (``{"mod": {...}, "elements": {...}, "reactions": [...]}``) and is
+    validated like one; ``origin`` names it in error messages.
+    """
+
+
+@hookspec
+def register_recorders(register: Callable[["RecorderSpec"], None]) -> None:
+    """Add output formats for ``sandmod render``.
+
+    ``register(spec)`` takes a :class:`~sandmod.recording.RecorderSpec`:
+    a name, the file extensions it writes, and a function that opens a
+    recorder on a path.
+    """

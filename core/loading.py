@@ -1,0 +1,92 @@
+"""From files to a ready world: plugins, mods, ruleset, world.
+
+These are the functions the CLI (and a Python user) calls::
+
+    from sandmod.loading import load_world
+    loaded = load_world("examples/hourglass.toml")
+    for _ in range(100):
+        loaded.world.step()
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import pluggy
+
+from .compiler import Ruleset, compile_mods
+from .modset import ModSet, find_mods
+from .registry import Registry, collect, make_plugin_manager
+from .tomlsource import TomlSource
+from .validation import validate
+from .world import World
+from .worldspec import WorldFile
+
+
+def load_registry(pm: pluggy.PluginManager | None = None) -> Registry:
+    """What the installed plugins register."""
+    return collect(pm or make_plugin_manager())
+
+
+def load_ruleset(
+    mods: Sequence[str] | None = None, mod_dirs: Iterable[Path] = (), registry: Registry | None = None
+) -> Ruleset:
+    """Compile the named mods (all found when ``None``) from the plugins' folders and ``mod_dirs``."""
+    registry = registry or load_registry()
+    return compile_mods(find_mods(registry, mod_dirs).select(mods))
+
+
+@dataclass(frozen=True)
+class LoadedWorld:
+    """A world file, its ruleset, and the world built from it."""
+
+    path: Path
+    spec: WorldFile
+    source: TomlSource
+    ruleset: Ruleset
+    world: World
+    registry: Registry
+
+
+def world_mod_dirs(path: Path, extra: Iterable[Path] = ()) -> list[Path]:
+    """Mod folders for a world: a ``mods/`` beside the world file, then ``extra``."""
+    beside = Path(path).parent / "mods"
+    return ([beside] if beside.is_dir() else []) + [Path(p) for p in extra]
+
+
+def read_world_spec(path: str | Path) -> tuple[WorldFile, TomlSource]:
+    """Read and validate a world file (no mods needed)."""
+    source = TomlSource.read(path)
+    return validate(WorldFile, source), source
+
+
+def load_world(
+    path: str | Path, *, mod_dirs: Iterable[Path] = (), seed: int | None = None, registry: Registry | None = None
+) -> LoadedWorld:
+    """Read a world file, load the mods it asks for and paint its scene."""
+    from .scene import build_world
+
+    path = Path(path)
+    spec, source = read_world_spec(path)
+    registry = registry or load_registry()
+    modset: ModSet = find_mods(registry, world_mod_dirs(path, mod_dirs))
+    ruleset = compile_mods(_select_for_world(modset, spec, source))
+    world = build_world(spec, ruleset, source, seed)
+    return LoadedWorld(path, spec, source, ruleset, world, registry)
+
+
+def _select_for_world(modset: ModSet, spec: WorldFile, source: TomlSource):
+    from .errors import ProblemsError
+
+    names = spec.world.mods
+    if names is not None:
+        missing = [
+            source.problem(("world", "mods", i), f"mod '{name}' was not found (found: {', '.join(sorted(modset.mods))})")
+            for i, name in enumerate(names)
+            if name not in modset.mods
+        ]
+        if missing:
+            raise ProblemsError(missing)
+    return modset.select(names)

@@ -1,0 +1,147 @@
+"""Find, read and validate mods, then pick the ones a world needs in load order.
+
+Mods come from folders (the bundled ``mods/``, folders that plugins register,
+a ``mods/`` beside the world file, ``--mods DIR``) and from plugins directly.
+Every file is read and validated before anything is reported, so one run
+lists every problem in every file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+from .errors import Problem, ProblemsError, display_path
+from .modspec import ModFile
+from .registry import Registry
+from .tomlsource import TomlSource
+from .validation import validate
+
+#: The mod every world loads: it defines ``empty`` and ``stone``.
+BASE_MOD = "base"
+
+
+@dataclass(frozen=True)
+class LoadedMod:
+    """A validated mod and where it came from."""
+
+    spec: ModFile
+    source: TomlSource
+    plugin: str
+
+    @property
+    def name(self) -> str:
+        return self.spec.mod.name
+
+    @property
+    def requires(self) -> list[str]:
+        """The mods this one needs loaded first (``base`` is always among them)."""
+        own = list(self.spec.mod.requires)
+        return own if self.name == BASE_MOD or BASE_MOD in own else [BASE_MOD, *own]
+
+
+@dataclass(frozen=True)
+class ModSet:
+    """Every mod that was found, by name."""
+
+    mods: dict[str, LoadedMod]
+
+    def select(self, names: Sequence[str] | None = None) -> list[LoadedMod]:
+        """The named mods (all when ``None``), what they require, and ``base``, in load order."""
+        wanted = list(self.mods) if names is None else [BASE_MOD, *names]
+        problems: list[Problem] = []
+        chosen: dict[str, LoadedMod] = {}
+        stack = [n for n in wanted if n in self.mods]
+        while stack:
+            mod = self.mods[stack.pop()]
+            if mod.name in chosen:
+                continue
+            chosen[mod.name] = mod
+            for i, need in enumerate(mod.spec.mod.requires):
+                if need in self.mods:
+                    stack.append(need)
+                else:
+                    problems.append(
+                        mod.source.problem(("mod", "requires", i), f"requires mod '{need}', which was not found")
+                    )
+        if BASE_MOD not in self.mods:
+            problems.append(Problem("mods", None, "", f"the '{BASE_MOD}' mod (empty, stone) was not found"))
+        if problems:
+            raise ProblemsError(problems)
+        return _load_order(chosen)
+
+
+def _load_order(mods: dict[str, LoadedMod]) -> list[LoadedMod]:
+    """Dependencies first; among mods free to go, alphabetical. Cycles are errors."""
+    order: list[LoadedMod] = []
+    done: set[str] = set()
+    remaining = dict(sorted(mods.items()))
+    while remaining:
+        ready = [name for name, mod in remaining.items() if all(r in done for r in mod.requires)]
+        if not ready:
+            cycle = _find_cycle(remaining)
+            first = remaining[cycle[0]]
+            raise ProblemsError(
+                [first.source.problem(("mod", "requires"), "dependency cycle: " + " -> ".join(cycle))]
+            )
+        name = ready[0]
+        order.append(remaining.pop(name))
+        done.add(name)
+    return order
+
+
+def _find_cycle(mods: dict[str, LoadedMod]) -> list[str]:
+    start = next(iter(mods))
+    path = [start]
+    while True:
+        following = next(r for r in mods[path[-1]].requires if r in mods)
+        if following in path:
+            return path[path.index(following) :] + [following]
+        path.append(following)
+
+
+def find_mods(registry: Registry, extra_dirs: Iterable[Path] = (), extra_files: Iterable[Path] = ()) -> ModSet:
+    """Read and validate every mod the registry, ``extra_dirs`` and ``extra_files`` provide."""
+    problems: list[Problem] = []
+    loaded: list[LoadedMod] = []
+
+    def add(source: TomlSource, plugin: str) -> None:
+        try:
+            loaded.append(LoadedMod(validate(ModFile, source), source, plugin))
+        except ProblemsError as exc:
+            problems.extend(exc.problems)
+
+    folders = [(entry.value, entry.plugin) for entry in registry.mod_dirs]
+    for folder in extra_dirs:
+        if Path(folder).is_dir():
+            folders.append((Path(folder), "user"))
+        else:
+            problems.append(Problem(display_path(folder), None, "", "mods folder does not exist"))
+    files = [(path, plugin) for folder, plugin in folders for path in sorted(Path(folder).iterdir())]
+    files += [(Path(path), "user") for path in extra_files]
+    seen: set[Path] = set()
+    for path, plugin in files:
+        loader = registry.mod_loaders.get(path.suffix.lower())
+        if loader is None or not path.is_file() or path.resolve() in seen:
+            continue
+        seen.add(path.resolve())
+        try:
+            add(loader.value(path), plugin)
+        except ProblemsError as exc:
+            problems.extend(exc.problems)
+    for entry in registry.mods:
+        add(entry.value, entry.plugin)
+
+    by_name: dict[str, LoadedMod] = {}
+    for mod in loaded:
+        other = by_name.get(mod.name)
+        if other is not None:
+            problems.append(
+                mod.source.problem(("mod", "name"), f"mod '{mod.name}' is also defined by {other.source.name}")
+            )
+            continue
+        by_name[mod.name] = mod
+    if problems:
+        raise ProblemsError(problems)
+    return ModSet(by_name)

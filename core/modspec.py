@@ -1,0 +1,211 @@
+"""The mod format: pydantic models that validate a mod file and document it.
+
+A mod is one TOML file::
+
+    [mod]
+    name = "lava"
+    version = "1.0.0"
+    requires = ["water"]
+
+    [elements.lava]
+    archetype = "liquid"
+    color = ["#ff6a00", "#ff9a1f"]
+    density = 3100
+    dispersion = 1
+    viscosity = 0.7
+
+    [[reactions]]
+    a = "lava"
+    b = "water"
+    a_becomes = "stone"
+    b_becomes = "steam"
+    chance = 0.5
+
+Each element picks an ``archetype``; each archetype accepts only its own
+parameters. Element names, tags and mod names are lower-case identifiers.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+
+from .validation import PATTERN_HINTS
+
+NAME = r"[a-z][a-z0-9_]*"
+MOD_NAME = r"[a-z][a-z0-9_-]*"
+ELEMENT_REF = rf"(?:{MOD_NAME}:)?{NAME}"
+SELECTOR = rf"!?(?:\*|#{NAME}|{ELEMENT_REF})"
+
+ElementName = Annotated[str, Field(pattern=rf"^{ELEMENT_REF}$")]
+ModName = Annotated[str, Field(pattern=rf"^{MOD_NAME}$")]
+Tag = Annotated[str, Field(pattern=rf"^{NAME}$")]
+HexColor = Annotated[
+    str,
+    Field(pattern=r"^#[0-9a-fA-F]{6}$", description="A colour as #rrggbb."),
+]
+
+ARCHETYPES = ("empty", "static", "powder", "liquid", "gas")
+EMPTY_ID = "base:empty"
+
+
+def _as_list(value: object) -> object:
+    return [value] if isinstance(value, str) else value
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class ModInfo(_Strict):
+    """The ``[mod]`` table: who this mod is and what it builds on."""
+
+    name: ModName = Field(description="The mod's name; element ids inside it are 'NAME:element'.")
+    version: str = Field(
+        "0.1.0",
+        pattern=r"^\d+(\.\d+){0,2}([.+-][0-9A-Za-z.+-]*)?$",
+        description="The mod's version, e.g. '1.2.0'.",
+    )
+    description: str = Field("", max_length=2000, description="One or two sentences for 'sandmod list'.")
+    requires: list[ModName] = Field(
+        default_factory=list,
+        description="Mods whose elements this mod names; they are loaded first.",
+    )
+
+
+class Lifetime(_Strict):
+    """After ``frames`` frames (plus up to ``jitter`` more) a cell becomes another element."""
+
+    frames: int = Field(ge=1, le=60000, description="Frames a cell lives before it turns into 'becomes'.")
+    jitter: int = Field(0, ge=0, le=5000, description="Up to this many extra frames, chosen per cell.")
+    becomes: ElementName = Field(description="The element a cell turns into when its time is up.")
+
+
+class _ElementBase(_Strict):
+    description: str = Field("", max_length=2000, description="What the element is, for 'sandmod list'.")
+    color: Annotated[list[HexColor], BeforeValidator(_as_list)] = Field(
+        description="Display colour ('#rrggbb'), or a list of up to 8 that each cell picks one of.",
+        json_schema_extra={"anyOf": [{"type": "string"}, {"type": "array"}]},
+    )
+    shade: float = Field(
+        0.06,
+        ge=0.0,
+        le=0.5,
+        description="Per-cell brightness variation (0 = flat colour, 0.5 = very grainy).",
+    )
+    tags: list[Tag] = Field(default_factory=list, description="Tags that reaction selectors ('#tag') match.")
+    lifetime: Lifetime | None = Field(None, description="Turn into another element after a while.")
+    override: bool = Field(
+        False,
+        description="Set to replace an element another mod defines (the key is then 'mod:element').",
+    )
+
+    @field_validator("color")
+    @classmethod
+    def _one_to_eight_colors(cls, value: list[str]) -> list[str]:
+        if not 1 <= len(value) <= 8:
+            raise ValueError("give between 1 and 8 colours")
+        return value
+
+
+_DENSITY = Field(
+    gt=0,
+    le=100000,
+    description="Mass per volume in kg/m3 (air 1.2, water 1000, sand 1600); heavier sinks through lighter.",
+)
+_DISPERSION = Field(
+    ge=1,
+    le=16,
+    description="How many cells sideways the element may flow in one frame.",
+)
+
+
+class EmptyElement(_ElementBase):
+    """The void between things (only ``base:empty``); its density is the air's."""
+
+    archetype: Literal["empty"]
+    density: float = Field(1.2, gt=0, le=100000, description="Density of the air, for what rises and sinks.")
+
+
+class StaticElement(_ElementBase):
+    """A solid that never moves: walls, stone, metal."""
+
+    archetype: Literal["static"]
+
+
+class PowderElement(_ElementBase):
+    """Falls, slides diagonally off slopes, piles up and sinks through lighter fluids."""
+
+    archetype: Literal["powder"]
+    density: float = _DENSITY
+
+
+class LiquidElement(_ElementBase):
+    """Falls and flows sideways up to ``dispersion`` cells a frame."""
+
+    archetype: Literal["liquid"]
+    density: float = _DENSITY
+    dispersion: int = _DISPERSION
+    viscosity: float = Field(
+        0.0,
+        ge=0.0,
+        lt=1.0,
+        description="Chance per frame that the liquid does not flow (0 = runny, 0.9 = treacle); it still falls.",
+    )
+
+
+class GasElement(_ElementBase):
+    """Rises through denser fluids (or sinks, if heavier than air) and spreads sideways."""
+
+    archetype: Literal["gas"]
+    density: float = _DENSITY
+    dispersion: int = _DISPERSION
+
+
+Element = Annotated[
+    Union[EmptyElement, StaticElement, PowderElement, LiquidElement, GasElement],
+    Field(discriminator="archetype"),
+]
+
+
+class Reaction(_Strict):
+    """When a cell matching ``a`` touches one matching ``b``, they may turn into other elements.
+
+    Selectors: an element (``water``, ``base:stone``), a tag (``#metal``), any
+    non-empty element (``*``), or a negation of one of those (``!#acid_proof``).
+    """
+
+    a: str = Field(pattern=rf"^{SELECTOR}$", description="Selector for the first cell.")
+    b: str = Field(pattern=rf"^{SELECTOR}$", description="Selector for the neighbouring cell.")
+    a_becomes: ElementName | None = Field(None, description="What the first cell becomes (unchanged if left out).")
+    b_becomes: ElementName | None = Field(None, description="What the second cell becomes (unchanged if left out).")
+    chance: float = Field(gt=0.0, le=1.0, description="Chance per frame that a touching pair reacts.")
+
+    @model_validator(mode="after")
+    def _changes_something(self) -> "Reaction":
+        if self.a_becomes is None and self.b_becomes is None:
+            raise ValueError("a reaction needs a_becomes, b_becomes or both")
+        return self
+
+
+class ModFile(_Strict):
+    """A whole mod file."""
+
+    mod: ModInfo = Field(description="Name, version and dependencies of the mod.")
+    elements: dict[ElementName, Element] = Field(
+        default_factory=dict,
+        description="The elements this mod defines, by name ('NAME' or 'othermod:NAME' to override).",
+    )
+    reactions: list[Reaction] = Field(default_factory=list, description="Reactions between touching cells.")
+
+
+PATTERN_HINTS.update(
+    {
+        f"^{ELEMENT_REF}$": "must be an element name like 'sand' or 'base:stone' (lower case, digits, _)",
+        f"^{MOD_NAME}$": "must be a mod name like 'sand' or 'my-mod' (lower case, digits, _ and -)",
+        f"^{NAME}$": "must be a lower-case name like 'acid_proof'",
+        f"^{SELECTOR}$": "must be an element ('water'), a tag ('#metal'), '*', or one of those after '!'",
+        r"^#[0-9a-fA-F]{6}$": "must be a colour like '#c2b280'",
+    }
+)

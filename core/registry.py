@@ -1,0 +1,127 @@
+"""The plugin manager, and what the plugins registered.
+
+:func:`make_plugin_manager` builds a fresh manager (no import-time state) with
+the built-in plugins and those installed under the ``sandmod`` entry-point
+group. :func:`collect` calls each registering hook and returns a
+:class:`Registry` that remembers which plugin gave what.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Generic, Mapping, TypeVar
+
+import pluggy
+
+from . import hooks
+from .errors import Problem, ProblemsError
+from .recording import RecorderSpec
+from .tomlsource import TomlSource
+
+T = TypeVar("T")
+
+#: Built-in plugins, registered by module name.
+BUILTIN_PLUGINS = ("sandmod.plugins.toml_mods", "sandmod.plugins.gif")
+#: Comma-separated plugin names to leave out (built-in or installed).
+DISABLE_ENV = "SANDMOD_DISABLE_PLUGINS"
+
+
+@dataclass(frozen=True)
+class Registered(Generic[T]):
+    """A value and the plugin that registered it."""
+
+    value: T
+    plugin: str
+
+
+@dataclass
+class Registry:
+    """Everything the plugins registered."""
+
+    mod_dirs: list[Registered[Path]] = field(default_factory=list)
+    mod_loaders: dict[str, Registered[hooks.ModLoader]] = field(default_factory=dict)
+    mods: list[Registered[TomlSource]] = field(default_factory=list)
+    recorders: dict[str, Registered[RecorderSpec]] = field(default_factory=dict)
+
+    def recorder_for(self, path: Path) -> RecorderSpec | None:
+        """The recorder that writes files with ``path``'s extension."""
+        suffix = path.suffix.lower()
+        for entry in reversed(self.recorders.values()):  # a later plugin wins
+            if suffix in entry.value.extensions:
+                return entry.value
+        return None
+
+
+def make_plugin_manager(*, entry_points: bool = True) -> pluggy.PluginManager:
+    """A plugin manager with sandmod's hooks, built-in plugins and installed plugins."""
+    import importlib
+
+    pm = pluggy.PluginManager(hooks.PROJECT)
+    pm.add_hookspecs(hooks)
+    for name in filter(None, (n.strip() for n in os.environ.get(DISABLE_ENV, "").split(","))):
+        pm.set_blocked(name)
+    for module_name in BUILTIN_PLUGINS:
+        if not pm.is_blocked(module_name):
+            pm.register(importlib.import_module(module_name), name=module_name)
+    if entry_points:
+        try:
+            pm.load_setuptools_entrypoints(hooks.PROJECT)
+        except Exception as exc:  # a broken third-party plugin must not look like our crash
+            raise ProblemsError([Problem("plugins", None, "", f"a plugin failed to load: {exc!r}")]) from exc
+    return pm
+
+
+def collect(pm: pluggy.PluginManager) -> Registry:
+    """Call every registering hook and gather what the plugins gave."""
+    registry = Registry()
+    problems: list[Problem] = []
+
+    def each(hook_name: str, make_register: Callable[[str], Callable[..., None]]) -> None:
+        caller = getattr(pm.hook, hook_name)
+        for impl in caller.get_hookimpls():  # in registration order: built-ins first
+            try:
+                impl.function(register=make_register(impl.plugin_name))
+            except ProblemsError as exc:
+                problems.extend(exc.problems)
+
+    def mod_dir(plugin: str) -> Callable[[Path], None]:
+        def register(path: Path) -> None:
+            path = Path(path)
+            if not path.is_dir():
+                problems.append(Problem(plugin, None, "register_mod_dirs", f"{path} is not a directory"))
+                return
+            registry.mod_dirs.append(Registered(path, plugin))
+
+        return register
+
+    def mod_loader(plugin: str) -> Callable[[str, hooks.ModLoader], None]:
+        def register(suffix: str, load: hooks.ModLoader) -> None:
+            if not (suffix.startswith(".") and callable(load)):
+                raise TypeError(f"plugin {plugin}: register(suffix, load) needs '.ext' and a function")
+            registry.mod_loaders[suffix.lower()] = Registered(load, plugin)
+
+        return register
+
+    def mod(plugin: str) -> Callable[[Mapping[str, Any], str], None]:
+        def register(data: Mapping[str, Any], origin: str) -> None:
+            registry.mods.append(Registered(TomlSource(origin, "", dict(data)), plugin))
+
+        return register
+
+    def recorder(plugin: str) -> Callable[[RecorderSpec], None]:
+        def register(spec: RecorderSpec) -> None:
+            if not isinstance(spec, RecorderSpec):
+                raise TypeError(f"plugin {plugin}: register() needs a RecorderSpec, got {spec!r}")
+            registry.recorders[spec.name] = Registered(spec, plugin)
+
+        return register
+
+    each("register_mod_dirs", mod_dir)
+    each("register_mod_loaders", mod_loader)
+    each("register_mods", mod)
+    each("register_recorders", recorder)
+    if problems:
+        raise ProblemsError(problems)
+    return registry

@@ -1,0 +1,142 @@
+"""Validate parsed TOML with a pydantic model and turn its errors into problems.
+
+Pydantic's messages are written for programmers; a mod author gets a short
+one (``must be > 0 (got -5)``), the field path as written in the file (the
+union's tag, like ``liquid``, is left out), and for unknown keys the list of
+keys that are allowed there.
+"""
+
+from __future__ import annotations
+
+import types
+import typing
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ValidationError
+
+from .tomlsource import Loc, TomlSource
+
+M = TypeVar("M", bound=BaseModel)
+
+#: Friendly words for the regular expressions the models use.
+PATTERN_HINTS: dict[str, str] = {}
+
+
+def validate(model: type[M], source: TomlSource) -> M:
+    """Validate ``source.data`` as ``model``; raise ProblemsError naming every mistake."""
+    from .errors import ProblemsError
+
+    try:
+        return model.model_validate(source.data)
+    except ValidationError as exc:
+        problems = [_to_problem(model, source, err) for err in exc.errors()]
+        raise ProblemsError(sorted(set(problems), key=lambda p: (p.line or 0, p.path, p.message))) from None
+
+
+def _to_problem(model: type[BaseModel], source: TomlSource, err: Any):
+    loc = _written_loc(source.data, err["loc"])
+    if err["type"] == "union_tag_invalid":
+        loc += (err["ctx"]["discriminator"].strip("'"),)
+    return source.problem(loc, _message(model, source.data, loc, err))
+
+
+def _written_loc(data: Any, loc: tuple) -> Loc:
+    """Drop the parts of pydantic's location that are not in the file (union tags)."""
+    kept: list[str | int] = []
+    current = data
+    for part in loc:
+        if isinstance(current, dict):
+            if part not in current and part in current.values():
+                continue  # a discriminated union's tag, e.g. "liquid"
+            current = current.get(part)
+        elif isinstance(current, list) and isinstance(part, int) and 0 <= part < len(current):
+            current = current[part]
+        elif current is not None:
+            break  # past a plain value only union member labels remain
+        kept.append(part)
+    return tuple(kept)
+
+
+def _message(model: type[BaseModel], data: Any, loc: Loc, err: Any) -> str:
+    kind, ctx, value = err["type"], err.get("ctx", {}), err.get("input")
+    got = f" (got {_show(value)})"
+    if kind == "missing":
+        return "required field is missing"
+    if kind == "extra_forbidden":
+        allowed = _allowed_fields(model, data, loc[:-1])
+        return "unknown field" + (f"; allowed here: {', '.join(allowed)}" if allowed else "")
+    comparisons = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
+    if kind in comparisons:
+        bound = next(iter(ctx.values()))
+        return f"must be {comparisons[kind]} {bound:g}{got}"
+    if kind == "string_pattern_mismatch":
+        return PATTERN_HINTS.get(ctx.get("pattern", ""), f"must match {ctx.get('pattern')}") + got
+    if kind == "union_tag_invalid":
+        return f"must be one of {ctx.get('expected_tags')} (got {_show(ctx.get('tag'))})"
+    if kind == "union_tag_not_found":
+        return f"required field '{ctx.get('discriminator', '').strip(chr(39))}' is missing"
+    if kind in ("value_error", "assertion_error"):
+        return str(ctx.get("error", err["msg"]))
+    if kind == "too_short" or kind == "too_long":
+        return err["msg"][0].lower() + err["msg"][1:]
+    msg = err["msg"]
+    if msg.startswith("Input should be "):
+        return "must be " + msg[len("Input should be "):] + got
+    return msg[0].lower() + msg[1:]
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _allowed_fields(model: type[BaseModel], data: Any, loc: Loc) -> list[str]:
+    """The field names of the model that validates the table at ``loc``."""
+    target: Any = model
+    current = data
+    for part in loc:
+        target = _inner(target, current)
+        if isinstance(target, type) and issubclass(target, BaseModel):
+            field = target.model_fields.get(str(part))
+            if field is None:
+                return []
+            target = field.annotation
+        else:
+            origin = typing.get_origin(target)
+            args = typing.get_args(target)
+            if origin in (dict, list) and args:
+                target = args[-1]
+            else:
+                return []
+        current = current.get(part) if isinstance(current, dict) else (
+            current[part] if isinstance(current, list) and isinstance(part, int) and part < len(current) else None
+        )
+    target = _inner(target, current)
+    if isinstance(target, type) and issubclass(target, BaseModel):
+        return list(target.model_fields)
+    return []
+
+
+def _inner(target: Any, value: Any) -> Any:
+    """Unwrap Annotated/Optional/Union down to the model that fits ``value``."""
+    while True:
+        origin = typing.get_origin(target)
+        if origin is typing.Annotated:
+            target = typing.get_args(target)[0]
+        elif origin in (typing.Union, types.UnionType):
+            models = [a for a in typing.get_args(target) if isinstance(a, type) and issubclass(a, BaseModel)]
+            if not models:
+                return target
+            target = _pick_union_member(models, value)
+        else:
+            return target
+
+
+def _pick_union_member(models: list[type[BaseModel]], value: Any) -> type[BaseModel]:
+    if isinstance(value, dict):
+        for candidate in models:
+            for name, field in candidate.model_fields.items():
+                literal = field.annotation
+                if typing.get_origin(literal) is typing.Literal and value.get(name) in typing.get_args(literal):
+                    return candidate
+    return models[0]

@@ -1,0 +1,1 @@
+"""The mods bundled with sandmod: one TOML file per element pack (data only)."""

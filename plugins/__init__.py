@@ -1,0 +1,1 @@
+"""Built-in plugins: sandmod's own behaviour, written against the public hooks."""

@@ -1,0 +1,1 @@
+"""sandmod's command line and developer tools."""

@@ -1,0 +1,190 @@
+"""The ``sandmod`` command line."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from sandmod import __version__
+from sandmod.errors import Problem, ProblemsError, display_path
+
+EXIT_USER_ERROR = 2
+
+
+class _Group(click.Group):
+    """Prints each problem in the user's input on its own line and exits 2, without a traceback."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except ProblemsError as exc:
+            for problem in exc.problems:
+                click.echo(str(problem), err=True)
+            ctx.exit(EXIT_USER_ERROR)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="sandmod")
+def cli() -> None:
+    """A falling-sand engine in which every element is data."""
+
+
+_mods_option = click.option(
+    "--mods",
+    "mod_dirs",
+    multiple=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Another folder of mods (repeatable).",
+)
+
+
+@cli.command()
+@click.argument("world", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Output file (default: WORLD.gif here).")
+@click.option("--frames", type=click.IntRange(1, 100000), help="Frames to simulate.")
+@click.option("--every", type=click.IntRange(1, 1000), help="Frames simulated per image.")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed (overrides the world's).")
+@click.option("--scale", type=click.IntRange(1, 16), help="Pixels per cell.")
+@click.option("--fps", type=click.FloatRange(0, 50, min_open=True), help="Images per second.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
+@_mods_option
+def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> None:
+    """Simulate WORLD (a world .toml file) and write an animation."""
+    from sandmod.loading import load_world
+    from sandmod.render import render as run
+
+    loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
+    settings = loaded.spec.render
+    if output is None:
+        output = world.parent / settings.output if settings.output else Path(f"{world.stem}.gif")
+    recorder = loaded.registry.recorder_for(output)
+    if recorder is None:
+        known = ", ".join(sorted(ext for r in loaded.registry.recorders.values() for ext in r.value.extensions))
+        raise ProblemsError([Problem(display_path(output), None, "", f"no recorder writes '{output.suffix}' files (known: {known})")])
+    frames = frames or settings.frames
+    started = time.perf_counter()
+    options = dict(frames=frames, every=every or settings.every, scale=scale or settings.scale, fps=fps or settings.fps)
+    if quiet or not sys.stderr.isatty():
+        result = run(loaded.world, recorder, output, **options)
+    else:
+        with click.progressbar(length=frames, label=f"{world.name}", file=sys.stderr) as bar:
+            result = run(loaded.world, recorder, output, progress=bar.update, **options)
+    if not quiet:
+        size = output.stat().st_size
+        click.echo(
+            f"wrote {display_path(output)}: {result.images} images of {result.width}x{result.height} "
+            f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({size / 1e6:.2f} MB)"
+        )
+
+
+@cli.command("list")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+@_mods_option
+def list_(as_json, mod_dirs) -> None:
+    """List the elements and reactions of every mod found."""
+    from sandmod.loading import load_registry
+    from sandmod.compiler import compile_mods
+    from sandmod.modset import find_mods
+
+    registry = load_registry()
+    ruleset = compile_mods(find_mods(registry, mod_dirs).select(None))
+    plugin_of = {m.name: m.plugin for m in ruleset.mods}
+    elements = [
+        {
+            "id": e.id,
+            "mod": e.defined_by,
+            "archetype": e.spec.archetype,
+            "density": getattr(e.spec, "density", None),
+            "tags": list(e.spec.tags),
+            "description": e.spec.description,
+            "plugin": plugin_of[e.defined_by],
+        }
+        for e in ruleset.elements
+    ]
+    reactions = [
+        {
+            "mod": r.mod,
+            "a": r.spec.a,
+            "b": r.spec.b,
+            "a_becomes": r.spec.a_becomes,
+            "b_becomes": r.spec.b_becomes,
+            "chance": r.spec.chance,
+        }
+        for r in ruleset.reactions
+    ]
+    if as_json:
+        mods = [{"name": m.name, "version": m.spec.mod.version, "file": m.source.name, "plugin": m.plugin} for m in ruleset.mods]
+        click.echo(json.dumps({"mods": mods, "elements": elements, "reactions": reactions}, indent=2))
+        return
+    rows = [(e["id"], e["archetype"], "" if e["density"] is None else f"{e['density']:g}", ", ".join(e["tags"]), e["description"]) for e in elements]
+    _table(("ELEMENT", "ARCHETYPE", "DENSITY", "TAGS", "DESCRIPTION"), rows)
+    click.echo()
+    rows = [
+        (f"{r['a']} + {r['b']}", f"{r['a_becomes'] or '(same)'} + {r['b_becomes'] or '(same)'}", f"{r['chance']:.0%}", r["mod"])
+        for r in reactions
+    ]
+    _table(("REACTION", "BECOMES", "CHANCE", "MOD"), rows)
+
+
+def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
+    widths = [max(len(str(row[i])) for row in [header, *rows]) for i in range(len(header))]
+    for row in [header, *rows]:
+        click.echo("  ".join(str(cell).ljust(w) for cell, w in zip(row, widths)).rstrip())
+
+
+@cli.command()
+@click.argument("paths", nargs=-1, type=click.Path(path_type=Path))
+@_mods_option
+def validate(paths, mod_dirs) -> None:
+    """Check mod files, mod folders and world files; exit 2 if anything is wrong.
+
+    With no PATHS, checks every mod found (the bundled ones and ./mods).
+    """
+    from sandmod.compiler import compile_mods
+    from sandmod.loading import load_registry, load_world
+    from sandmod.modset import find_mods
+    from sandmod.tomlsource import TomlSource
+
+    registry = load_registry()
+    problems: list[Problem] = []
+    folders, mod_files, worlds = list(mod_dirs), [], []
+    if not paths and Path("mods").is_dir():
+        folders.append(Path("mods"))
+    for path in paths:
+        if path.is_dir():
+            folders.append(path)
+            continue
+        try:
+            data = TomlSource.read(path).data
+        except ProblemsError as exc:
+            problems.extend(exc.problems)
+            continue
+        if "world" in data:
+            worlds.append(path)
+        elif "mod" in data:
+            mod_files.append(path)
+        else:
+            problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
+    try:
+        ruleset = compile_mods(find_mods(registry, folders, mod_files).select(None))
+    except ProblemsError as exc:
+        problems.extend(exc.problems)
+        ruleset = None
+    for world in worlds:
+        try:
+            load_world(world, mod_dirs=mod_dirs, registry=registry)
+        except ProblemsError as exc:
+            problems.extend(exc.problems)
+    if problems:
+        raise ProblemsError(problems)
+    mods = len(ruleset.mods) if ruleset else 0
+    click.echo(f"ok: {mods} mods ({len(ruleset.elements)} elements, {len(ruleset.reactions)} reactions), {len(worlds)} worlds")
+
+
+def main() -> None:
+    """Entry point of the ``sandmod`` console script."""
+    cli(prog_name="sandmod")
