@@ -252,6 +252,7 @@ def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tupl
 
 def _compile_reactions(mods, elements, ids, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
     winner: dict[tuple[int, int], tuple[int, LoadedMod, int]] = {}  # pair -> (score, mod, reaction number)
+    reported: set[tuple[str, int, str, int]] = set()  # conflicts already named, by both reactions
     compiled: list[CompiledReaction] = []
     for mod in mods:
         for number, reaction in enumerate(mod.spec.reactions):
@@ -276,6 +277,10 @@ def _compile_reactions(mods, elements, ids, t: Tables, resolve, problems) -> tup
                         if held is not None and held[0] > score:
                             continue
                         if held is not None and held[0] == score and not same:
+                            conflict = (mod.name, number, held[1].name, held[2])
+                            if conflict in reported:
+                                continue
+                            reported.add(conflict)
                             earlier = held[1].source.problem(("reactions", held[2]), "")
                             problems.append(
                                 mod.source.problem(

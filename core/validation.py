@@ -34,10 +34,13 @@ def validate(model: type[M], source: TomlSource) -> M:
 
 
 def _to_problem(model: type[BaseModel], source: TomlSource, err: Any):
-    loc = _written_loc(source.data, err["loc"])
+    raw = tuple(err["loc"])
+    is_key = "[key]" in raw  # the error is in a table's key, not its value
+    loc = _written_loc(source.data, raw[: raw.index("[key]")] if is_key else raw)
     if err["type"] == "union_tag_invalid":
         loc += (err["ctx"]["discriminator"].strip("'"),)
-    return source.problem(loc, _message(model, source.data, loc, err))
+    message = _message(model, source.data, loc, err)
+    return source.problem(loc, f"invalid name: {message}" if is_key else message)
 
 
 def _written_loc(data: Any, loc: tuple) -> Loc:

@@ -41,6 +41,7 @@ class GifRecorder:
             append_images=rest,
             duration=delay,
             loop=self._settings.loop,
+            palette=self._settings.palette,  # one global colour table, no table per frame
             optimize=False,
             disposal=1,
         )

@@ -1,0 +1,65 @@
+"""Shared helpers: worlds drawn as text, rulesets from extra mod files."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sandmod.compiler import Ruleset
+from sandmod.loading import load_registry, load_ruleset
+from sandmod.world import World
+
+LEGEND = {
+    ".": "empty",
+    "#": "stone",
+    "S": "sand",
+    "W": "water",
+    "L": "lava",
+    "A": "acid",
+    "T": "titanium",
+    "G": "steam",
+}
+
+
+@pytest.fixture(scope="session")
+def registry():
+    return load_registry()
+
+
+@pytest.fixture(scope="session")
+def ruleset(registry) -> Ruleset:
+    """Every bundled mod."""
+    return load_ruleset(registry=registry)
+
+
+def write_mods(folder: Path, files: dict[str, str]) -> Path:
+    """Write mod files (dedented) into ``folder``; returns the folder."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        (folder / name).write_text(textwrap.dedent(text).lstrip(), encoding="utf-8")
+    return folder
+
+
+def make_world(ruleset: Ruleset, rows: list[str], legend: dict[str, str] = LEGEND, seed: int = 0) -> World:
+    """A world painted from text rows, one character per cell."""
+    world = World(ruleset, len(rows[0]), len(rows), seed)
+    chars = np.array([list(row) for row in rows])
+    for char, name in legend.items():
+        if name != "empty" and (chars == char).any():
+            world.paint(chars == char, ruleset.index(name))
+    return world
+
+
+def as_rows(world: World, legend: dict[str, str] = LEGEND) -> list[str]:
+    """The world as text rows (the inverse of :func:`make_world`)."""
+    char_of = {world.ruleset.index(name): char for char, name in legend.items()}
+    return ["".join(char_of[int(e)] for e in row) for row in world.cells]
+
+
+def run(world: World, frames: int) -> World:
+    for _ in range(frames):
+        world.step()
+    return world

@@ -1,0 +1,277 @@
+"""The command line end to end: real GIFs, listings, validation, errors, drop-in mods."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image, ImageSequence
+
+from conftest import write_mods
+from sandmod.tools.cli import cli
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+
+POURING = """
+[world]
+width = 40
+height = 30
+seed = 4
+
+[[scene]]
+shape = "rect"
+element = "stone"
+x = 0
+y = 27
+width = 40
+height = 3
+
+[[emitters]]
+shape = "rect"
+element = "{element}"
+x = 18
+y = 0
+width = 4
+height = 1
+chance = 1.0
+
+[render]
+frames = 36
+every = 4
+scale = 2
+fps = 10
+"""
+
+
+@pytest.fixture(autouse=True)
+def _in_tmp(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(cli, list(args), catch_exceptions=False)
+
+
+def palette_colours(path: Path) -> set[tuple[int, int, int]]:
+    with Image.open(path) as im:
+        return {px for frame in ImageSequence.Iterator(im) for _, px in frame.convert("RGB").getcolors(1 << 16)}
+
+
+def test_render_writes_a_gif_with_every_image(tmp_path):
+    Path("pour.toml").write_text(POURING.format(element="sand"))
+    result = invoke("render", "pour.toml", "-o", "out.gif")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("wrote out.gif: 10 images of 80x60 from 36 frames")
+    with Image.open("out.gif") as im:
+        assert im.format == "GIF" and im.size == (80, 60)
+        assert im.n_frames == 10  # the first image and one every 4 of 36 frames: all differ
+        assert im.info["duration"] == 100 and im.info["loop"] == 0
+        last = [frame.convert("RGB") for frame in ImageSequence.Iterator(im)][-1]
+    sand = {(0xDC, 0xC3, 0x8A), (0xD2, 0xB4, 0x78), (0xE4, 0xCF, 0x9C)}
+    near_sand = lambda c: any(sum(abs(a - b) for a, b in zip(c, s)) < 60 for s in sand)  # noqa: E731
+    assert near_sand(last.getpixel((40, 50)))  # grains have landed in the middle of the floor
+    assert not near_sand(last.getpixel((2, 2)))  # and not in the top-left corner
+
+
+def test_render_options_override_the_world_file():
+    Path("pour.toml").write_text(POURING.format(element="water"))
+    result = invoke("render", "pour.toml", "--frames", "6", "--every", "2", "--scale", "1", "--seed", "9")
+    assert result.exit_code == 0, result.output
+    with Image.open("pour.gif") as im:
+        assert im.size == (40, 30) and im.n_frames == 4
+
+
+def test_same_seed_renders_the_same_file_twice():
+    Path("pour.toml").write_text(POURING.format(element="water"))
+    invoke("render", "pour.toml", "-o", "a.gif")
+    invoke("render", "pour.toml", "-o", "b.gif")
+    assert Path("a.gif").read_bytes() == Path("b.gif").read_bytes()
+
+
+@pytest.mark.parametrize("name", ["hourglass", "lava_lake", "acid_wall"])
+def test_each_example_world_renders(name):
+    result = invoke("render", str(EXAMPLES / f"{name}.toml"), "-o", f"{name}.gif", "--frames", "40", "--scale", "1")
+    assert result.exit_code == 0, result.output
+    with Image.open(f"{name}.gif") as im:
+        assert im.n_frames > 1
+
+
+def test_bad_world_is_one_line_per_problem_exit_2_and_no_file():
+    Path("bad.toml").write_text(
+        textwrap.dedent(
+            """
+            [world]
+            width = 40
+            height = 0
+
+            [[scene]]
+            shape = "blob"
+            element = "sand"
+            """
+        )
+    )
+    result = invoke("render", "bad.toml", "-o", "bad.gif")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "bad.toml:4: world.height: must be >= 4 (got 0)",
+        "bad.toml:7: scene.0.shape: must be one of 'rect', 'circle', 'line', 'fill' (got 'blob')",
+    ]
+    assert "Traceback" not in result.output
+    assert not list(Path(".").glob("*.gif*")) and not list(Path(".").glob(".bad.gif*"))
+
+
+def test_unknown_elements_in_a_scene_are_named_with_their_line():
+    Path("typo.toml").write_text(POURING.format(element="snad"))
+    result = invoke("render", "typo.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == ["typo.toml:17: emitters.0.element: unknown element 'snad' (did you mean 'sand'?)"]
+
+
+def test_unknown_mod_and_output_format():
+    Path("w.toml").write_text('[world]\nwidth = 10\nheight = 10\nmods = ["sand", "glitter"]\n')
+    result = invoke("render", "w.toml")
+    assert result.exit_code == 2
+    assert result.stderr.startswith("w.toml:4: world.mods.1: mod 'glitter' was not found (found: acid, base,")
+    Path("w.toml").write_text("[world]\nwidth = 10\nheight = 10\n")
+    result = invoke("render", "w.toml", "-o", "w.mp4")
+    assert result.exit_code == 2
+    assert result.stderr.strip() == "w.mp4: no recorder writes '.mp4' files (known: .gif)"
+
+
+def test_missing_world_file():
+    result = invoke("render", "nowhere.toml")
+    assert result.exit_code == 2
+    assert result.stderr.startswith("nowhere.toml: cannot read file")
+
+
+def test_list_shows_elements_and_reactions():
+    result = invoke("list")
+    assert result.exit_code == 0
+    lines = result.stdout.splitlines()
+    assert lines[0].split() == ["ELEMENT", "ARCHETYPE", "DENSITY", "TAGS", "DESCRIPTION"]
+    assert any(line.startswith("sand:sand") and "powder" in line for line in lines)
+    assert any(line.startswith("lava + water") and "stone + steam" in line for line in lines)
+
+
+def test_list_json():
+    data = json.loads(invoke("list", "--json").stdout)
+    by_id = {e["id"]: e for e in data["elements"]}
+    assert by_id["titanium:titanium"]["tags"] == ["metal", "acid_proof"]
+    assert by_id["water:water"] | {"description": ""} == {
+        "id": "water:water",
+        "mod": "water",
+        "archetype": "liquid",
+        "density": 1000.0,
+        "tags": [],
+        "description": "",
+        "plugin": "sandmod.plugins.toml_mods",
+    }
+    assert {"mod": "lava", "a": "lava", "b": "water", "a_becomes": "stone", "b_becomes": "steam", "chance": 0.3} in data["reactions"]
+    assert [m["name"] for m in data["mods"]][0] == "base"
+
+
+def test_validate_accepts_good_files_and_reports_every_bad_one():
+    result = invoke("validate", str(EXAMPLES / "hourglass.toml"), str(EXAMPLES / "acid_wall.toml"))
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("ok: 7 mods") and result.stdout.rstrip().endswith("2 worlds")
+    write_mods(
+        Path("mods"),
+        {
+            "a.toml": '[mod]\nname = "a"\n[elements.x]\narchetype = "powder"\ncolor = "#000000"\ndensity = -1\n',
+            "b.toml": '[mod]\nname = "b"\n[elements.y]\narchetype = "gas"\ncolor = "#000000"\ndensity = 1\n',
+        },
+    )
+    Path("notes.toml").write_text('title = "hello"\n')
+    result = invoke("validate", "mods", "notes.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "notes.toml:1: neither a mod (no [mod] table) nor a world (no [world] table)",
+        "mods/a.toml:6: elements.x.density: must be > 0 (got -1)",
+        "mods/b.toml:3: elements.y.dispersion: required field is missing",
+    ]
+
+
+def test_a_dropped_in_mod_appears_in_list_and_render():
+    write_mods(
+        Path("mods"),
+        {
+            "glitter.toml": """
+                [mod]
+                name = "glitter"
+
+                [elements.glitter]
+                archetype = "powder"
+                color = "#ff00ff"
+                shade = 0.0
+                density = 1200
+            """
+        },
+    )
+    Path("world.toml").write_text(POURING.format(element="glitter"))
+    listed = json.loads(invoke("list", "--json", "--mods", "mods").stdout)
+    assert "glitter:glitter" in {e["id"] for e in listed["elements"]}
+    result = invoke("render", "world.toml", "-o", "glitter.gif")  # mods/ beside the world file
+    assert result.exit_code == 0, result.output
+    assert (255, 0, 255) in palette_colours(Path("glitter.gif"))
+    # Also from any folder, with --mods.
+    Path("elsewhere").mkdir()
+    Path("mods").rename("elsewhere/mods2")
+    Path("world.toml").rename("elsewhere/world.toml")
+    assert invoke("render", "elsewhere/world.toml", "-o", "g2.gif").exit_code == 2
+    assert invoke("render", "elsewhere/world.toml", "-o", "g2.gif", "--mods", "elsewhere/mods2").exit_code == 0
+
+
+def test_commands_that_do_not_simulate_do_not_import_numba(tmp_path):
+    code = textwrap.dedent(
+        f"""
+        import sys
+        from click.testing import CliRunner
+        from sandmod.tools.cli import cli
+        for args in (["list"], ["validate", {str(EXAMPLES / "hourglass.toml")!r}]):
+            result = CliRunner().invoke(cli, args)
+            assert result.exit_code == 0, result.output
+        assert "numba" not in sys.modules, "numba was imported"
+        """
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_console_script_is_installed():
+    result = subprocess.run([Path(sys.executable).parent / "sandmod", "--version"], capture_output=True, text=True)
+    assert result.returncode == 0 and "sandmod" in result.stdout
+
+
+def gif_colour_tables(data: bytes) -> tuple[bool, int, int]:
+    """(has a global colour table, image count, local colour table count) of a GIF file."""
+    flags = data[10]
+    i = 13 + (3 * 2 ** ((flags & 7) + 1) if flags & 0x80 else 0)
+    images = local = 0
+    while data[i] != 0x3B:  # trailer
+        if data[i] == 0x21:  # extension: label, then sub-blocks
+            i += 2
+        else:  # image descriptor, optional local table, LZW code size, then sub-blocks
+            images += 1
+            packed = data[i + 9]
+            i += 10
+            if packed & 0x80:
+                local += 1
+                i += 3 * 2 ** ((packed & 7) + 1)
+            i += 1
+        while data[i]:
+            i += data[i] + 1
+        i += 1
+    return bool(flags & 0x80), images, local
+
+
+def test_rendered_frames_share_one_global_palette():
+    Path("pour.toml").write_text(POURING.format(element="sand"))
+    invoke("render", "pour.toml", "-o", "p.gif")
+    assert gif_colour_tables(Path("p.gif").read_bytes()) == (True, 10, 0)
+    with Image.open("p.gif") as im:
+        assert im.mode == "P" and np.asarray(im).dtype == np.uint8

@@ -1,0 +1,260 @@
+"""Mods to tables: ids, displacement, reactions, names, overrides, dependencies."""
+
+from __future__ import annotations
+
+import pytest
+
+from conftest import write_mods
+from sandmod.compiler import ARCHETYPE_CODES
+from sandmod.errors import ProblemsError
+from sandmod.hashing import ROLL_ONE
+from sandmod.loading import load_ruleset
+
+
+@pytest.fixture(autouse=True)
+def _relative_paths(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # problems name files relative to the working directory
+
+
+def problems_of(registry, tmp_path, files: dict[str, str], mods=None) -> list[str]:
+    with pytest.raises(ProblemsError) as caught:
+        load_ruleset(mods, [write_mods(tmp_path / "mods", files)], registry)
+    return [str(p) for p in caught.value.problems]
+
+
+def test_ids_are_empty_first_then_sorted(ruleset):
+    ids = [e.id for e in ruleset.elements]
+    assert ids[0] == "base:empty"
+    assert ids[1:] == sorted(ids[1:])
+    assert [e.index for e in ruleset.elements] == list(range(len(ids)))
+
+
+def test_tables_hold_each_elements_parameters(ruleset):
+    t, i = ruleset.tables, ruleset.index
+    assert t.archetype[i("sand")] == ARCHETYPE_CODES["powder"]
+    assert t.archetype[i("stone")] == ARCHETYPE_CODES["static"]
+    assert (t.gravity[i("sand")], t.gravity[i("water")], t.gravity[i("steam")], t.gravity[i("stone")]) == (1, 1, -1, 0)
+    assert t.dispersion[i("water")] == 4 and t.dispersion[i("lava")] == 2
+    assert t.rest_chance[i("lava")] == round(0.6 * ROLL_ONE)
+    assert t.life_frames[i("steam")] == 220 and t.life_into[i("steam")] == i("water")
+
+
+def test_density_decides_who_displaces_whom(ruleset):
+    d, i = ruleset.tables.displace, ruleset.index
+    assert d[i("sand"), i("water")] and not d[i("water"), i("sand")]
+    assert d[i("lava"), i("water")] and d[i("water"), i("empty")]
+    assert d[i("steam"), i("water")] and d[i("steam"), i("empty")] and not d[i("water"), i("water")]
+    assert not d[i("sand"), i("stone")] and not d[i("sand"), i("sand")]
+    assert not d[i("stone")].any()
+
+
+def test_reactions_fill_the_matrix_both_ways(ruleset):
+    t, i = ruleset.tables, ruleset.index
+    lava, water = i("lava"), i("water")
+    assert t.react_chance[lava, water] == t.react_chance[water, lava] == round(0.3 * ROLL_ONE)
+    assert (t.react_into_a[lava, water], t.react_into_b[lava, water]) == (i("stone"), i("steam"))
+    assert (t.react_into_a[water, lava], t.react_into_b[water, lava]) == (i("steam"), i("stone"))
+
+
+def test_tag_selectors_spare_acid_proof_elements(ruleset):
+    t, i = ruleset.tables, ruleset.index
+    acid = i("acid")
+    assert t.react_chance[acid, i("titanium")] == 0 and t.react_chance[acid, acid] == 0
+    assert t.react_chance[acid, i("empty")] == 0
+    for victim in ("stone", "sand", "lava", "steam"):
+        assert t.react_chance[acid, i(victim)] == round(0.2 * ROLL_ONE)
+        assert (t.react_into_a[acid, i(victim)], t.react_into_b[acid, i(victim)]) == (0, 0)
+
+
+def test_a_more_specific_reaction_wins(ruleset):
+    t, i = ruleset.tables, ruleset.index
+    assert t.react_chance[i("acid"), i("water")] == round(0.003 * ROLL_ONE)
+    assert (t.react_into_a[i("acid"), i("water")], t.react_into_b[i("acid"), i("water")]) == (i("water"), i("water"))
+
+
+def test_reactions_of_equal_rank_that_disagree_are_an_error(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "fizz.toml": """
+                [mod]
+                name = "fizz"
+                requires = ["sand"]
+
+                [[reactions]]
+                a = "#x"
+                b = "sand"
+                a_becomes = "empty"
+                chance = 0.5
+
+                [[reactions]]
+                a = "#x"
+                b = "sand"
+                b_becomes = "empty"
+                chance = 0.5
+
+                [elements.foam]
+                archetype = "static"
+                color = "#ffffff"
+                tags = ["x"]
+            """
+        },
+    )
+    assert problems == [
+        "mods/fizz.toml:11: reactions.1: fizz:foam + sand:sand also reacts differently at mods/fizz.toml:5 "
+        "(reactions.0); make one selector more specific",
+    ]
+
+
+def test_unknown_element_suggests_a_name(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "mud.toml": """
+                [mod]
+                name = "mud"
+                requires = ["sand"]
+
+                [elements.mud]
+                archetype = "powder"
+                color = "#553311"
+                density = 1800
+                lifetime = { frames = 10, becomes = "snad" }
+            """
+        },
+    )
+    assert problems == ["mods/mud.toml:9: elements.mud.lifetime.becomes: unknown element 'snad' (did you mean 'sand'?)"]
+
+
+def test_naming_another_mods_element_needs_requires(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "wet.toml": """
+                [mod]
+                name = "wet"
+
+                [[reactions]]
+                a = "sand"
+                b = "water"
+                a_becomes = "stone"
+                chance = 0.1
+            """
+        },
+    )
+    assert problems == [
+        "mods/wet.toml:5: reactions.0.a: 'sand:sand' is from mod 'sand'; add 'sand' to mod.requires",
+        "mods/wet.toml:6: reactions.0.b: 'water:water' is from mod 'water'; add 'water' to mod.requires",
+    ]
+
+
+def test_ambiguous_bare_names_are_errors(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "beach.toml": """
+                [mod]
+                name = "beach"
+
+                [elements.sand]
+                archetype = "powder"
+                color = "#ffffff"
+                density = 1500
+            """,
+            "user.toml": """
+                [mod]
+                name = "user"
+                requires = ["beach", "sand"]
+
+                [elements.glass]
+                archetype = "static"
+                color = "#aaddff"
+                lifetime = { frames = 5, becomes = "sand" }
+            """,
+        },
+    )
+    assert problems == [
+        "mods/user.toml:8: elements.glass.lifetime.becomes: 'sand' is ambiguous; write one of: beach:sand, sand:sand"
+    ]
+
+
+def test_redefining_an_element_needs_override(registry, tmp_path):
+    files = {
+        "redsand.toml": """
+            [mod]
+            name = "redsand"
+            requires = ["sand"]
+
+            [elements."sand:sand"]
+            archetype = "powder"
+            color = "#cc3322"
+            density = 1600
+        """
+    }
+    problems = problems_of(registry, tmp_path, files)
+    assert problems == [
+        f"mods/redsand.toml:5: elements.sand:sand: 'sand:sand' is already defined by "
+        f"{_bundled('sand.toml')}; set override = true to replace it"
+    ]
+    files["redsand.toml"] = files["redsand.toml"].replace("density = 1600", "density = 1600\n            override = true")
+    ruleset = load_ruleset(None, [write_mods(tmp_path / "ok", files)], registry)
+    sand = ruleset.elements[ruleset.index("sand:sand")]
+    assert sand.spec.color == ["#cc3322"] and sand.defined_by == "redsand" and sand.overrides == ("sand",)
+
+
+def _bundled(name: str) -> str:
+    from sandmod.errors import display_path
+    from sandmod.plugins.toml_mods import bundled_mods_dir
+
+    return display_path(bundled_mods_dir() / name)
+
+
+def test_override_of_nothing_is_an_error(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "ghost.toml": """
+                [mod]
+                name = "ghost"
+
+                [elements.wisp]
+                archetype = "static"
+                color = "#ffffff"
+                override = true
+            """
+        },
+    )
+    assert problems == ["mods/ghost.toml:4: elements.wisp: 'ghost:wisp' is not defined by any loaded mod (nothing to override)"]
+
+
+def test_missing_required_mod_cycles_and_duplicate_names(registry, tmp_path):
+    assert problems_of(registry, tmp_path / "a", {"x.toml": '[mod]\nname = "x"\nrequires = ["nope"]\n'}) == [
+        "a/mods/x.toml:3: mod.requires.0: requires mod 'nope', which was not found"
+    ]
+    cycle = {"p.toml": '[mod]\nname = "p"\nrequires = ["q"]\n', "q.toml": '[mod]\nname = "q"\nrequires = ["p"]\n'}
+    assert problems_of(registry, tmp_path / "b", cycle) == ["b/mods/p.toml:3: mod.requires: dependency cycle: p -> q -> p"]
+    twins = {"one.toml": '[mod]\nname = "twin"\n', "two.toml": '[mod]\nname = "twin"\n'}
+    assert problems_of(registry, tmp_path / "c", twins) == [
+        "c/mods/two.toml:2: mod.name: mod 'twin' is also defined by c/mods/one.toml"
+    ]
+
+
+def test_load_order_puts_dependencies_first(registry):
+    ruleset = load_ruleset(["lava"], registry=registry)
+    names = [m.name for m in ruleset.mods]
+    assert names == ["base", "water", "steam", "lava"]
+
+
+def test_palette_gives_each_element_its_shades(ruleset):
+    assert len(ruleset.palette) == 768
+    shades = ruleset.shades
+    assert ruleset.color_lut.shape == (len(ruleset.elements), shades)
+    assert len(set(ruleset.color_lut.ravel().tolist())) == len(ruleset.elements) * shades
+    stone = ruleset.index("stone")
+    colours = {tuple(ruleset.palette[3 * k : 3 * k + 3]) for k in ruleset.color_lut[stone]}
+    assert all(abs(r - 0x6B) < 40 for r, g, b in colours)

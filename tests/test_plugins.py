@@ -1,0 +1,136 @@
+"""The plugin API: built-ins are plugins, third parties register through the same hooks."""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sandmod import hooks
+from sandmod.compiler import compile_mods
+from sandmod.errors import ProblemsError
+from sandmod.modset import find_mods
+from sandmod.recording import RecorderSpec, VideoSettings
+from sandmod.registry import BUILTIN_PLUGINS, collect, make_plugin_manager
+from sandmod.render import render
+from sandmod.world import World
+
+
+class FramesInMemory:
+    """A recorder that keeps frames (and writes their count)."""
+
+    def __init__(self, path: Path, settings: VideoSettings):
+        self.path, self.settings, self.frames = path, settings, []
+
+    def add_frame(self, frame: np.ndarray) -> None:
+        self.frames.append(frame.copy())
+
+    def close(self) -> None:
+        self.path.write_text(str(len(self.frames)))
+
+
+class ThirdParty:
+    """A plugin as a package would ship it."""
+
+    @hooks.hookimpl
+    def register_mods(self, register):
+        register(
+            {
+                "mod": {"name": "neon", "version": "2.0.0"},
+                "elements": {"neon": {"archetype": "gas", "color": "#ff2299", "density": 0.9, "dispersion": 2}},
+            },
+            "neon (python)",
+        )
+
+    @hooks.hookimpl
+    def register_recorders(self, register):
+        register(RecorderSpec("count", (".count",), FramesInMemory, "Counts frames."))
+
+
+def test_every_hook_is_typed_and_documented():
+    specs = [f for name, f in inspect.getmembers(hooks, inspect.isfunction) if name.startswith("register_")]
+    assert len(specs) == 4
+    for spec in specs:
+        assert spec.__doc__ and len(spec.__doc__.strip()) > 40, spec.__name__
+        assert set(spec.__annotations__) == {"register", "return"}, spec.__name__
+
+
+def test_built_in_behaviour_comes_from_plugins():
+    pm = make_plugin_manager(entry_points=False)
+    assert {pm.get_name(p) for p in pm.get_plugins()} == set(BUILTIN_PLUGINS)
+    registry = collect(pm)
+    assert registry.mod_loaders[".toml"].plugin == "sandmod.plugins.toml_mods"
+    assert registry.recorders["gif"].plugin == "sandmod.plugins.gif"
+    assert [d.plugin for d in registry.mod_dirs] == ["sandmod.plugins.toml_mods"]
+
+
+def test_each_manager_is_independent():
+    first = make_plugin_manager(entry_points=False)
+    first.register(ThirdParty(), name="third")
+    assert "count" not in collect(make_plugin_manager(entry_points=False)).recorders
+
+
+def test_a_third_party_plugin_adds_a_mod_and_a_recorder(tmp_path):
+    pm = make_plugin_manager(entry_points=False)
+    pm.register(ThirdParty(), name="neon-plugin")
+    registry = collect(pm)
+    assert registry.recorders["count"].plugin == "neon-plugin"
+    ruleset = compile_mods(find_mods(registry).select(["neon"]))
+    assert [m.name for m in ruleset.mods] == ["base", "neon"]
+    assert [m.plugin for m in ruleset.mods] == ["sandmod.plugins.toml_mods", "neon-plugin"]
+    world = World(ruleset, 8, 8)
+    world.paint(np.eye(8, dtype=bool), ruleset.index("neon"))
+    result = render(world, registry.recorder_for(Path("x.count")), tmp_path / "x.count", frames=4, every=2)
+    assert (tmp_path / "x.count").read_text() == "3" and result.images == 3
+
+
+def test_python_mods_are_validated_like_files():
+    class Broken:
+        @hooks.hookimpl
+        def register_mods(self, register):
+            register({"mod": {"name": "bad"}, "elements": {"x": {"archetype": "powder", "color": "#000000"}}}, "bad (python)")
+
+    pm = make_plugin_manager(entry_points=False)
+    pm.register(Broken(), name="broken")
+    with pytest.raises(ProblemsError) as caught:
+        find_mods(collect(pm))
+    assert [str(p) for p in caught.value.problems] == ["bad (python): elements.x.density: required field is missing"]
+
+
+def test_plugins_can_be_disabled_by_name(monkeypatch):
+    monkeypatch.setenv("SANDMOD_DISABLE_PLUGINS", "sandmod.plugins.gif")
+    registry = collect(make_plugin_manager(entry_points=False))
+    assert "gif" not in registry.recorders and ".toml" in registry.mod_loaders
+
+
+def test_a_registered_folder_must_exist(tmp_path):
+    class Lost:
+        @hooks.hookimpl
+        def register_mod_dirs(self, register):
+            register(tmp_path / "missing")
+
+    pm = make_plugin_manager(entry_points=False)
+    pm.register(Lost(), name="lost")
+    with pytest.raises(ProblemsError) as caught:
+        collect(pm)
+    assert str(caught.value.problems[0]).startswith("lost: register_mod_dirs: ")
+
+
+class Exploding(FramesInMemory):
+    def add_frame(self, frame):
+        if len(self.frames) == 2:
+            self.path.write_text("half a file")
+            raise RuntimeError("disk on fire")
+        super().add_frame(frame)
+
+
+def test_a_failed_render_leaves_no_file_and_keeps_the_old_one(tmp_path, ruleset):
+    out = tmp_path / "movie.count"
+    out.write_text("the previous render")
+    spec = RecorderSpec("boom", (".count",), Exploding)
+    with pytest.raises(RuntimeError):
+        render(World(ruleset, 8, 8), spec, out, frames=10)
+    assert out.read_text() == "the previous render"
+    assert [p.name for p in tmp_path.iterdir()] == ["movie.count"]
