@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,27 @@ from sandmod.recording import RecorderSpec, VideoSettings
 MIN_DELAY_MS = 20
 
 
+def distinct_colours(palette: bytes) -> bytes:
+    """The palette with repeated colours nudged by one unit, so every entry is distinct.
+
+    Pillow matches frame colours to a given palette by colour; repeats make
+    that slow and ambiguous. A change of one unit in one channel is invisible.
+    """
+    seen: set[tuple[int, int, int]] = set()
+    out = bytearray(palette)
+    for i in range(0, len(out), 3):
+        r, g, b = out[i : i + 3]
+        for dr, dg, db in itertools.product((0, 1, -1), repeat=3):  # (0, 0, 0) first
+            candidate = (min(max(r + dr, 0), 255), min(max(g + dg, 0), 255), min(max(b + db, 0), 255))
+            if candidate not in seen:
+                break
+        else:
+            candidate = next((v, v, v) for v in range(256) if (v, v, v) not in seen)
+        seen.add(candidate)
+        out[i : i + 3] = bytes(candidate)
+    return bytes(out)
+
+
 class GifRecorder:
     """Collects palette frames and writes them as one animated GIF."""
 
@@ -21,12 +43,13 @@ class GifRecorder:
 
         self._image = Image
         self._path = path
+        self._palette = distinct_colours(settings.palette)
         self._settings = settings
         self._frames: list = []
 
     def add_frame(self, frame: np.ndarray) -> None:
         image = self._image.fromarray(np.ascontiguousarray(frame, dtype=np.uint8), mode="P")
-        image.putpalette(self._settings.palette)
+        image.putpalette(self._palette)
         self._frames.append(image)
 
     def close(self) -> None:
@@ -41,7 +64,7 @@ class GifRecorder:
             append_images=rest,
             duration=delay,
             loop=self._settings.loop,
-            palette=self._settings.palette,  # one global colour table, no table per frame
+            palette=self._palette,  # one global colour table, no table per frame
             optimize=False,
             disposal=1,
         )

@@ -134,3 +134,14 @@ def test_a_failed_render_leaves_no_file_and_keeps_the_old_one(tmp_path, ruleset)
         render(World(ruleset, 8, 8), spec, out, frames=10)
     assert out.read_text() == "the previous render"
     assert [p.name for p in tmp_path.iterdir()] == ["movie.count"]
+
+
+def test_gif_palette_colours_are_made_distinct_invisibly():
+    from sandmod.plugins.gif import distinct_colours
+
+    palette = bytes([10, 10, 10] * 5 + [0, 0, 0] * 251)
+    out = distinct_colours(palette)
+    triples = [tuple(out[i : i + 3]) for i in range(0, 768, 3)]
+    assert len(set(triples)) == 256
+    assert triples[0] == (10, 10, 10)
+    assert all(max(abs(a - b) for a, b in zip(t, (10, 10, 10))) <= 1 for t in triples[:5])
