@@ -145,3 +145,14 @@ def test_gif_palette_colours_are_made_distinct_invisibly():
     assert len(set(triples)) == 256
     assert triples[0] == (10, 10, 10)
     assert all(max(abs(a - b) for a, b in zip(t, (10, 10, 10))) <= 1 for t in triples[:5])
+
+
+def test_a_finished_render_gets_ordinary_file_permissions(tmp_path, ruleset):
+    import os
+
+    out = tmp_path / "movie.count"
+    render(World(ruleset, 8, 8), RecorderSpec("count", (".count",), FramesInMemory), out, frames=2)
+    plain = tmp_path / "plain"
+    plain.write_text("")
+    assert out.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
+    assert os.access(out, os.R_OK)
