@@ -58,7 +58,12 @@ def world_mod_dirs(path: Path, extra: Iterable[Path] = ()) -> list[Path]:
 
 def read_world_spec(path: str | Path) -> tuple[WorldFile, TomlSource]:
     """Read and validate a world file (no mods needed)."""
+    from .errors import ProblemsError
+
     source = TomlSource.read(path)
+    if "mod" in source.data and "world" not in source.data:
+        hint = "this is a mod ([mod]), not a world ([world]); put it in a mods/ folder beside your world"
+        raise ProblemsError([source.problem(("mod",), hint)])
     return validate(WorldFile, source), source
 
 

@@ -84,7 +84,8 @@ def index_lines(text: str) -> dict[Loc, int]:
                 if prefix in array_counts:
                     resolved.append(array_counts[prefix])
             table = tuple(resolved)
-            lines.setdefault(table, number)
+            for end in range(1, len(table) + 1):  # [a.b] also opens a
+                lines.setdefault(table[:end], number)
             continue
         parsed = _parse_key(raw, 0)
         if parsed is None:

@@ -275,3 +275,20 @@ def test_rendered_frames_share_one_global_palette():
     assert gif_colour_tables(Path("p.gif").read_bytes()) == (True, 10, 0)
     with Image.open("p.gif") as im:
         assert im.mode == "P" and np.asarray(im).dtype == np.uint8
+
+
+def test_a_mod_given_as_a_world_says_so():
+    write_mods(Path("mods"), {"m.toml": '[mod]\nname = "m"\n'})
+    result = invoke("render", "mods/m.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "mods/m.toml:1: mod: this is a mod ([mod]), not a world ([world]); put it in a mods/ folder beside your world"
+    ]
+
+
+def test_an_unwritable_output_is_a_problem_not_a_traceback():
+    Path("pour.toml").write_text(POURING.format(element="sand"))
+    Path("blocker").write_text("a file where a folder should be")
+    result = invoke("render", "pour.toml", "-o", "blocker/out.gif", "--frames", "2")
+    assert result.exit_code == 2
+    assert result.stderr.startswith("blocker/out.gif: cannot write: ")

@@ -57,3 +57,8 @@ def test_unreadable_file_is_a_problem_not_a_traceback(tmp_path):
     with pytest.raises(ProblemsError) as caught:
         TomlSource.read(tmp_path / "absent.toml")
     assert "cannot read file" in str(caught.value)
+
+
+def test_a_dotted_header_also_opens_its_parents():
+    lines = index_lines("[mod]\n\n[elements.sand]\nx = 1\n")
+    assert lines[("elements",)] == 3 and lines[("elements", "sand", "x")] == 4

@@ -68,11 +68,14 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
     frames = frames or settings.frames
     started = time.perf_counter()
     options = dict(frames=frames, every=every or settings.every, scale=scale or settings.scale, fps=fps or settings.fps)
-    if quiet or not sys.stderr.isatty():
-        result = run(loaded.world, recorder, output, **options)
-    else:
-        with click.progressbar(length=frames, label=f"{world.name}", file=sys.stderr) as bar:
-            result = run(loaded.world, recorder, output, progress=bar.update, **options)
+    try:
+        if quiet or not sys.stderr.isatty():
+            result = run(loaded.world, recorder, output, **options)
+        else:
+            with click.progressbar(length=frames, label=f"{world.name}", file=sys.stderr) as bar:
+                result = run(loaded.world, recorder, output, progress=bar.update, **options)
+    except OSError as exc:
+        raise ProblemsError([Problem(display_path(output), None, "", f"cannot write: {exc.strerror or exc}")]) from None
     if not quiet:
         size = output.stat().st_size
         click.echo(
