@@ -33,27 +33,26 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
     world = World(ruleset, info.width, info.height, info.seed if seed is None else seed)
     problems: list[Problem] = []
 
-    def element(table: str, number: int, name: str) -> int | None:
+    def place(table: str, number: int, shape) -> tuple[int, np.ndarray] | None:
+        """The element and the cells of a scene shape or emitter, or None (problem noted)."""
+        mask = shape_mask(shape, world.cells)
+        if not mask.any():
+            problems.append(source.problem((table, number), f"the shape lies outside the {info.width}x{info.height} world"))
         try:
-            return ruleset.index(name)
+            index = ruleset.index(shape.element)
         except KeyError as exc:
             problems.append(source.problem((table, number, "element"), exc.args[0]))
             return None
+        return (index, mask) if mask.any() else None
 
-    for number, shape in enumerate(spec.scene):
-        index = element("scene", number, shape.element)
-        mask = shape_mask(shape, world.cells)
-        if not mask.any():
-            problems.append(source.problem(("scene", number), f"the shape lies outside the {info.width}x{info.height} world"))
-        elif index is not None:
-            world.paint(mask, index)
+    for number, shape in enumerate(spec.scene):  # in order: a fill sees what came before
+        placed = place("scene", number, shape)
+        if placed is not None:
+            world.paint(placed[1], placed[0])
     for number, emitter in enumerate(spec.emitters):
-        index = element("emitters", number, emitter.element)
-        mask = shape_mask(emitter, world.cells)
-        if not mask.any():
-            problems.append(source.problem(("emitters", number), f"the shape lies outside the {info.width}x{info.height} world"))
-        elif index is not None:
-            world.emitters.append(Emitter(mask, index, emitter.start, emitter.stop, emitter.chance))
+        placed = place("emitters", number, emitter)
+        if placed is not None:
+            world.emitters.append(Emitter(placed[1], placed[0], emitter.start, emitter.stop, emitter.chance))
     if problems:
         raise ProblemsError(problems)
     return world

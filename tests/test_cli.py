@@ -292,3 +292,12 @@ def test_an_unwritable_output_is_a_problem_not_a_traceback():
     result = invoke("render", "pour.toml", "-o", "blocker/out.gif", "--frames", "2")
     assert result.exit_code == 2
     assert result.stderr.startswith("blocker/out.gif: cannot write: ")
+
+
+def test_a_shape_outside_the_world_is_an_error():
+    Path("w.toml").write_text(
+        '[world]\nwidth = 10\nheight = 10\n\n[[scene]]\nshape = "rect"\nelement = "sand"\nx = 50\ny = 0\nwidth = 3\nheight = 3\n'
+    )
+    result = invoke("validate", "w.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == ["w.toml:5: scene.0: the shape lies outside the 10x10 world"]
