@@ -102,8 +102,11 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     """Compile mods (in load order) into a :class:`Ruleset`; ProblemsError lists every mistake."""
     problems: list[Problem] = []
     defs = _collect_elements(mods, problems)
-    if EMPTY_ID not in defs:
+    empty = defs.get(EMPTY_ID)
+    if empty is None:
         problems.append(Problem("mods", None, "", f"no element '{EMPTY_ID}' is defined"))
+    elif empty.spec.archetype != "empty":
+        problems.append(empty.source.problem(empty.loc + ("archetype",), f"'{EMPTY_ID}' must be 'empty'"))
     if problems:
         raise ProblemsError(problems)
     order = [EMPTY_ID] + sorted(i for i in defs if i != EMPTY_ID)
@@ -111,7 +114,8 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
         raise ProblemsError([Problem("mods", None, "", f"{len(order)} elements loaded; at most {MAX_ELEMENTS}")])
     ids = {element_id: i for i, element_id in enumerate(order)}
     elements = tuple(
-        ElementInfo(ids[eid], eid, d.spec, d.source, d.mod, tuple(d.replaced)) for eid, d in ((e, defs[e]) for e in order)
+        ElementInfo(i, eid, defs[eid].spec, defs[eid].source, defs[eid].mod, tuple(defs[eid].replaced))
+        for i, eid in enumerate(order)
     )
     by_mod = {m.name: m for m in mods}
 
@@ -126,41 +130,55 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
             return None
         return ids[found]
 
-    n = len(order)
-    t = _empty_tables(n)
-    air_density = elements[0].spec.density
-    densities = np.zeros(n)
+    t = _empty_tables(len(order))
     for info in elements:
-        spec, i = info.spec, info.index
         d = defs[info.id]
-        t.archetype[i] = ARCHETYPE_CODES[spec.archetype]
-        densities[i] = getattr(spec, "density", np.inf)
-        if spec.archetype in ("powder", "liquid"):
-            t.gravity[i] = 1
-        elif spec.archetype == "gas":
-            t.gravity[i] = 1 if spec.density > air_density else -1
-        t.dispersion[i] = getattr(spec, "dispersion", 0)
-        t.rest_chance[i] = chance_threshold(getattr(spec, "viscosity", 0.0))
-        if spec.archetype == "empty" and info.id != EMPTY_ID:
-            problems.append(d.source.problem(d.loc + ("archetype",), f"only '{EMPTY_ID}' may be 'empty'"))
-        if spec.lifetime is not None:
-            into = resolve(spec.lifetime.becomes, by_mod[d.mod], d.loc + ("lifetime", "becomes"))
+        _fill_element(t, info, d, problems)
+        if info.spec.lifetime is not None:
+            into = resolve(info.spec.lifetime.becomes, by_mod[d.mod], d.loc + ("lifetime", "becomes"))
             if into is not None:
-                t.life_frames[i] = spec.lifetime.frames
-                t.life_jitter[i] = spec.lifetime.jitter
-                t.life_into[i] = into
-    fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("empty", "liquid", "gas")])
-    for a in range(1, n):
-        if t.gravity[a] == 0:
-            continue
-        lighter = densities < densities[a] if t.gravity[a] > 0 else densities > densities[a]
-        t.displace[a] = fluid & lighter
-        t.displace[a, a] = 0
-    reactions = _compile_reactions(mods, elements, ids, t, resolve, problems)
+                t.life_frames[info.index] = info.spec.lifetime.frames
+                t.life_jitter[info.index] = info.spec.lifetime.jitter
+                t.life_into[info.index] = into
+    _fill_displacement(t, elements)
+    reactions = _compile_reactions(mods, elements, t, resolve, problems)
     if problems:
         raise ProblemsError(problems)
     palette, lut = _palette(elements)
     return Ruleset(tuple(mods), elements, reactions, t, palette, lut, ids)
+
+
+def _fill_element(t: Tables, info: ElementInfo, d: "_Definition", problems: list[Problem]) -> None:
+    """The per-element parameters of one element."""
+    spec, i = info.spec, info.index
+    t.archetype[i] = ARCHETYPE_CODES[spec.archetype]
+    if spec.archetype == "empty" and info.id != EMPTY_ID:
+        problems.append(d.source.problem(d.loc + ("archetype",), f"only '{EMPTY_ID}' may be 'empty'"))
+    t.dispersion[i] = getattr(spec, "dispersion", 0)
+    t.rest_chance[i] = chance_threshold(getattr(spec, "viscosity", 0.0))
+
+
+def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
+    """Gravity (+1 falls, -1 rises) and who may swap into whom.
+
+    Powders and liquids fall; gases rise, or fall if heavier than the air
+    (``base:empty``'s density). A mover may swap with a fluid (empty, liquid,
+    gas) lighter than itself when falling, denser when rising.
+    """
+    air = elements[0].spec.density
+    densities = np.array([getattr(e.spec, "density", np.inf) for e in elements])
+    for e in elements:
+        kind = e.spec.archetype
+        if kind in ("powder", "liquid") or (kind == "gas" and e.spec.density > air):
+            t.gravity[e.index] = 1
+        elif kind == "gas":
+            t.gravity[e.index] = -1
+    fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("empty", "liquid", "gas")])
+    for a in range(1, len(elements)):
+        if t.gravity[a] != 0:
+            lighter = densities < densities[a] if t.gravity[a] > 0 else densities > densities[a]
+            t.displace[a] = fluid & lighter
+            t.displace[a, a] = 0
 
 
 @dataclass
@@ -250,7 +268,8 @@ def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tupl
     return (non_empty - matched, 1) if negate else (matched, score)
 
 
-def _compile_reactions(mods, elements, ids, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
+def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
+    """Fill the interaction matrix; the more specific of two reactions on a pair wins."""
     winner: dict[tuple[int, int], tuple[int, LoadedMod, int]] = {}  # pair -> (score, mod, reaction number)
     reported: set[tuple[str, int, str, int]] = set()  # conflicts already named, by both reactions
     compiled: list[CompiledReaction] = []

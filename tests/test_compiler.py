@@ -258,3 +258,22 @@ def test_palette_gives_each_element_its_shades(ruleset):
     stone = ruleset.index("stone")
     colours = {tuple(ruleset.palette[3 * k : 3 * k + 3]) for k in ruleset.color_lut[stone]}
     assert all(abs(r - 0x6B) < 40 for r, g, b in colours)
+
+
+def test_empty_must_stay_empty(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "void.toml": """
+                [mod]
+                name = "void"
+
+                [elements."base:empty"]
+                archetype = "static"
+                color = "#000000"
+                override = true
+            """
+        },
+    )
+    assert problems == ["mods/void.toml:5: elements.base:empty.archetype: 'base:empty' must be 'empty'"]
