@@ -80,8 +80,6 @@ def _message(model: type[BaseModel], data: Any, loc: Loc, err: Any) -> str:
         return f"required field '{ctx.get('discriminator', '').strip(chr(39))}' is missing"
     if kind in ("value_error", "assertion_error"):
         return str(ctx.get("error", err["msg"]))
-    if kind == "too_short" or kind == "too_long":
-        return err["msg"][0].lower() + err["msg"][1:]
     msg = err["msg"]
     if msg.startswith("Input should be "):
         return "must be " + msg[len("Input should be "):] + got

@@ -59,10 +59,10 @@ class World:
         if only_empty:
             keep = self.cells[ys, xs] == 0
             ys, xs = ys[keep], xs[keep]
-        h = cell_hash(frame_key(self.seed, self.frame, salt), xs.astype(np.uint64), ys.astype(np.uint64))
         if chance < 1.0:
-            keep = (h >> (32 - ROLL_BITS)) < chance_threshold(chance)
-            ys, xs, h = ys[keep], xs[keep], h[keep]
+            roll = cell_hash(frame_key(self.seed, self.frame, salt), xs.astype(np.uint64), ys.astype(np.uint64))
+            keep = (roll >> (32 - ROLL_BITS)) < chance_threshold(chance)
+            ys, xs = ys[keep], xs[keep]
         t = self.ruleset.tables
         h = cell_hash(frame_key(self.seed, self.frame, SALT_SPAWN ^ salt), xs.astype(np.uint64), ys.astype(np.uint64))
         shade, timer = spawn_state(h, int(t.life_frames[element]), int(t.life_jitter[element]))

@@ -89,12 +89,9 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
 @_mods_option
 def list_(as_json, mod_dirs) -> None:
     """List the elements and reactions of every mod found."""
-    from sandmod.loading import load_registry
-    from sandmod.compiler import compile_mods
-    from sandmod.modset import find_mods
+    from sandmod.loading import load_ruleset
 
-    registry = load_registry()
-    ruleset = compile_mods(find_mods(registry, mod_dirs).select(None))
+    ruleset = load_ruleset(None, mod_dirs)
     plugin_of = {m.name: m.plugin for m in ruleset.mods}
     elements = [
         {
@@ -172,20 +169,22 @@ def validate(paths, mod_dirs) -> None:
             mod_files.append(path)
         else:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
+    ruleset = None
     try:
         ruleset = compile_mods(find_mods(registry, folders, mod_files).select(None))
     except ProblemsError as exc:
         problems.extend(exc.problems)
-        ruleset = None
     for world in worlds:
         try:
             load_world(world, mod_dirs=mod_dirs, registry=registry)
         except ProblemsError as exc:
             problems.extend(exc.problems)
-    if problems:
+    if problems or ruleset is None:
         raise ProblemsError(problems)
-    mods = len(ruleset.mods) if ruleset else 0
-    click.echo(f"ok: {mods} mods ({len(ruleset.elements)} elements, {len(ruleset.reactions)} reactions), {len(worlds)} worlds")
+    click.echo(
+        f"ok: {len(ruleset.mods)} mods ({len(ruleset.elements)} elements, {len(ruleset.reactions)} reactions), "
+        f"{len(worlds)} worlds"
+    )
 
 
 def main() -> None:
