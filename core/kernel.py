@@ -19,10 +19,29 @@ and return plain numbers only.
 
 from __future__ import annotations
 
-from numba import njit
+import os
+from pathlib import Path
 
-from . import hashing
-from .compiler import ARCHETYPE_CODES
+
+def kernel_cache_dir() -> Path:
+    """Where compiled kernels are kept: ``$NUMBA_CACHE_DIR``, else the user's cache folder.
+
+    Not beside the installed package, where numba would put them by default:
+    files pip did not install would survive an uninstall there, leaving a
+    stray ``sandmod`` folder that shadows a later editable install.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or os.environ.get("LOCALAPPDATA") or Path.home() / ".cache"
+    return Path(base) / "sandmod" / "numba"
+
+
+os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
+
+from numba import njit  # noqa: E402
+
+from . import hashing  # noqa: E402
+from .compiler import ARCHETYPE_CODES  # noqa: E402
 
 _mix32 = njit(inline="always", cache=True)(hashing.mix32)
 _spawn_state = njit(inline="always", cache=True)(hashing.spawn_state)
