@@ -270,9 +270,30 @@ def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tupl
 
 def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
     """Fill the interaction matrix; the more specific of two reactions on a pair wins."""
-    winner: dict[tuple[int, int], tuple[int, LoadedMod, int]] = {}  # pair -> (score, mod, reaction number)
+    # pair -> (score, mod, reaction number, (what a becomes, what b becomes, threshold))
+    winner: dict[tuple[int, int], tuple[int, LoadedMod, int, tuple[int, int, int]]] = {}
     reported: set[tuple[str, int, str, int]] = set()  # conflicts already named, by both reactions
     compiled: list[CompiledReaction] = []
+
+    def claim(pair, outcome, score, mod, number) -> None:
+        held = winner.get(pair)
+        if held is not None and (held[0] > score or (held[0] == score and held[3] == outcome)):
+            return
+        if held is not None and held[0] == score:
+            conflict = (mod.name, number, held[1].name, held[2])
+            if conflict not in reported:
+                reported.add(conflict)
+                earlier = held[1].source.problem(("reactions", held[2]), "")
+                problems.append(
+                    mod.source.problem(
+                        ("reactions", number),
+                        f"{elements[pair[0]].id} + {elements[pair[1]].id} also reacts differently at "
+                        f"{earlier.file}:{earlier.line} ({earlier.path}); make one selector more specific",
+                    )
+                )
+            return
+        winner[pair] = (score, mod, number, outcome)
+
     for mod in mods:
         for number, reaction in enumerate(mod.spec.reactions):
             loc = ("reactions", number)
@@ -283,41 +304,22 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[Co
             if side_a is None or side_b is None or (reaction.a_becomes and into_a is None) or (reaction.b_becomes and into_b is None):
                 continue
             (set_a, score_a), (set_b, score_b) = side_a, side_b
-            score = score_a + score_b
             threshold = chance_threshold(reaction.chance)
             for i in sorted(set_a):
                 for j in sorted(set_b):
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
-                    entries = [((i, j), out_i, out_j)] + ([((j, i), out_j, out_i)] if i != j else [])
-                    for pair, first, second in entries:
-                        held = winner.get(pair)
-                        same = (t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair]) == (first, second, threshold)
-                        if held is not None and held[0] > score:
-                            continue
-                        if held is not None and held[0] == score and not same:
-                            conflict = (mod.name, number, held[1].name, held[2])
-                            if conflict in reported:
-                                continue
-                            reported.add(conflict)
-                            earlier = held[1].source.problem(("reactions", held[2]), "")
-                            problems.append(
-                                mod.source.problem(
-                                    loc,
-                                    f"{elements[pair[0]].id} + {elements[pair[1]].id} also reacts differently at "
-                                    f"{earlier.file}:{earlier.line} ({earlier.path}); make one selector more specific",
-                                )
-                            )
-                            continue
-                        winner[pair] = (score, mod, number)
-                        t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
+                    claim((i, j), (out_i, out_j, threshold), score_a + score_b, mod, number)
+                    if i != j:  # the same contact, seen from the other cell
+                        claim((j, i), (out_j, out_i, threshold), score_a + score_b, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
                 )
             )
-    involved = (t.react_chance > 0).any(axis=1)
-    t.reactive[:] = involved
+    for pair, (_, _, _, (first, second, threshold)) in winner.items():
+        t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
+    t.reactive[:] = (t.react_chance > 0).any(axis=1)
     return tuple(compiled)
 
 

@@ -52,7 +52,8 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
     for number, emitter in enumerate(spec.emitters):
         placed = place("emitters", number, emitter)
         if placed is not None:
-            world.emitters.append(Emitter(placed[1], placed[0], emitter.start, emitter.stop, emitter.chance))
+            ys, xs = np.nonzero(placed[1])
+            world.emitters.append(Emitter(ys, xs, placed[0], emitter.start, emitter.stop, emitter.chance))
     if problems:
         raise ProblemsError(problems)
     return world

@@ -27,9 +27,10 @@ from .hashing import (
 
 @dataclass(frozen=True)
 class Emitter:
-    """Pours ``element`` into the empty cells of ``mask`` while start <= frame < stop."""
+    """Pours ``element`` into the empty ones of its cells while start <= frame < stop."""
 
-    mask: np.ndarray
+    ys: np.ndarray  # the rows and columns of the emitter's cells
+    xs: np.ndarray
     element: int
     start: int
     stop: int | None
@@ -56,15 +57,22 @@ class World:
     def paint(self, mask: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT) -> int:
         """Set the cells of ``mask`` to ``element`` as newly born cells; returns how many changed."""
         ys, xs = np.nonzero(mask)
+        return self.paint_cells(ys, xs, element, chance=chance, only_empty=only_empty, salt=salt)
+
+    def paint_cells(
+        self, ys: np.ndarray, xs: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT
+    ) -> int:
+        """:meth:`paint` for cells given by their rows and columns."""
         if only_empty:
             keep = self.cells[ys, xs] == 0
             ys, xs = ys[keep], xs[keep]
+        ys, xs = ys.astype(np.uint64), xs.astype(np.uint64)
         if chance < 1.0:
-            roll = cell_hash(frame_key(self.seed, self.frame, salt), xs.astype(np.uint64), ys.astype(np.uint64))
+            roll = cell_hash(frame_key(self.seed, self.frame, salt), xs, ys)
             keep = (roll >> (32 - ROLL_BITS)) < chance_threshold(chance)
             ys, xs = ys[keep], xs[keep]
         t = self.ruleset.tables
-        h = cell_hash(frame_key(self.seed, self.frame, SALT_SPAWN ^ salt), xs.astype(np.uint64), ys.astype(np.uint64))
+        h = cell_hash(frame_key(self.seed, self.frame, SALT_SPAWN ^ salt), xs, ys)
         shade, timer = spawn_state(h, int(t.life_frames[element]), int(t.life_jitter[element]))
         self.cells[ys, xs] = element
         self.shade[ys, xs] = shade
@@ -77,7 +85,9 @@ class World:
 
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
-                self.paint(emitter.mask, emitter.element, chance=emitter.chance, only_empty=True, salt=SALT_PAINT + 1 + number)
+                self.paint_cells(
+                    emitter.ys, emitter.xs, emitter.element, chance=emitter.chance, only_empty=True, salt=SALT_PAINT + 1 + number
+                )
         step(
             self.cells,
             self.shade,
