@@ -18,11 +18,13 @@ import numpy as np
 from .errors import Problem, ProblemsError
 from .hashing import chance_threshold
 from .modset import BASE_MOD, LoadedMod
-from .modspec import EMPTY_ID, Element, Reaction
+from .modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
 from .tomlsource import TomlSource
 
 #: Archetype codes as the kernel knows them.
-ARCHETYPE_CODES = {"empty": 0, "static": 1, "powder": 2, "liquid": 3, "gas": 4}
+ARCHETYPE_CODES = {"empty": 0, "static": 1, "powder": 2, "liquid": 3, "gas": 4, "particle": 5}
+#: Velocities are fixed-point: this many units make one cell per frame.
+SUBCELL = 256
 #: Most elements a ruleset may hold (palette renders use 256 colours).
 MAX_ELEMENTS = 256
 
@@ -31,7 +33,13 @@ class Tables(NamedTuple):
     """Per-element parameters and pair matrices, indexed by numeric element id."""
 
     archetype: np.ndarray  # uint8[n]: ARCHETYPE_CODES
-    gravity: np.ndarray  # int8[n]: +1 falls, -1 rises, 0 stays
+    fall_dir: np.ndarray  # int8[n]: +1 falls, -1 rises, 0 stays (particles fly by accel)
+    accel: np.ndarray  # int32[n]: gravity along fall_dir (particles: downwards), SUBCELL units
+    max_speed: np.ndarray  # int32[n]: terminal speed, SUBCELL units
+    friction: np.ndarray  # int32[n]: friction coefficient, of 256: braking = friction * accel
+    knock_chance: np.ndarray  # uint32[n]: roll threshold for a knock to loosen a resting grain
+    drag_keep: np.ndarray  # int32[n]: particle speed kept per frame, of 256
+    carries: np.ndarray  # uint16[n]: what a spawned particle element carries (0 = nothing)
     dispersion: np.ndarray  # uint8[n]: cells sideways per frame (liquids, gases)
     rest_chance: np.ndarray  # uint32[n]: roll threshold to rest a frame (viscosity)
     life_frames: np.ndarray  # uint16[n]: frames before decay, 0 = forever
@@ -87,6 +95,11 @@ class Ruleset:
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
 
     @property
+    def particle(self) -> int:
+        """The id of ``base:particle``, what launched cells fly as."""
+        return self._ids[PARTICLE_ID]
+
+    @property
     def shades(self) -> int:
         return self.color_lut.shape[1]
 
@@ -102,11 +115,12 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     """Compile mods (in load order) into a :class:`Ruleset`; ProblemsError lists every mistake."""
     problems: list[Problem] = []
     defs = _collect_elements(mods, problems)
-    empty = defs.get(EMPTY_ID)
-    if empty is None:
-        problems.append(Problem("mods", None, "", f"no element '{EMPTY_ID}' is defined"))
-    elif empty.spec.archetype != "empty":
-        problems.append(empty.source.problem(empty.loc + ("archetype",), f"'{EMPTY_ID}' must be 'empty'"))
+    for required, archetype in ((EMPTY_ID, "empty"), (PARTICLE_ID, "particle")):
+        found = defs.get(required)
+        if found is None:
+            problems.append(Problem("mods", None, "", f"no element '{required}' is defined"))
+        elif found.spec.archetype != archetype:
+            problems.append(found.source.problem(found.loc + ("archetype",), f"'{required}' must be '{archetype}'"))
     if problems:
         raise ProblemsError(problems)
     order = [EMPTY_ID] + sorted(i for i in defs if i != EMPTY_ID)
@@ -140,6 +154,11 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.life_frames[info.index] = info.spec.lifetime.frames
                 t.life_jitter[info.index] = info.spec.lifetime.jitter
                 t.life_into[info.index] = into
+        carried = getattr(info.spec, "carries", None)
+        if carried is not None:
+            what = resolve(carried, by_mod[d.mod], d.loc + ("carries",))
+            if what is not None:
+                t.carries[info.index] = what
     _fill_displacement(t, elements)
     reactions = _compile_reactions(mods, elements, t, resolve, problems)
     if problems:
@@ -156,10 +175,15 @@ def _fill_element(t: Tables, info: ElementInfo, d: "_Definition", problems: list
         problems.append(d.source.problem(d.loc + ("archetype",), f"only '{EMPTY_ID}' may be 'empty'"))
     t.dispersion[i] = getattr(spec, "dispersion", 0)
     t.rest_chance[i] = chance_threshold(getattr(spec, "viscosity", 0.0))
+    t.accel[i] = round(getattr(spec, "gravity", 0.0) * SUBCELL)
+    t.max_speed[i] = round(getattr(spec, "max_speed", 1.0) * SUBCELL)
+    t.friction[i] = round(getattr(spec, "friction", 0.0) * 256)
+    t.knock_chance[i] = chance_threshold(1.0 - getattr(spec, "inertial_resistance", 1.0))
+    t.drag_keep[i] = round((1.0 - getattr(spec, "drag", 0.0)) * 256)
 
 
 def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
-    """Gravity (+1 falls, -1 rises) and who may swap into whom.
+    """Which way movers fall (+1 falls, -1 rises) and who may swap into whom.
 
     Powders and liquids fall; gases rise, or fall if heavier than the air
     (``base:empty``'s density). A mover may swap with a fluid (empty, liquid,
@@ -170,15 +194,16 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
     for e in elements:
         kind = e.spec.archetype
         if kind in ("powder", "liquid") or (kind == "gas" and e.spec.density > air):
-            t.gravity[e.index] = 1
+            t.fall_dir[e.index] = 1
         elif kind == "gas":
-            t.gravity[e.index] = -1
+            t.fall_dir[e.index] = -1
     fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("empty", "liquid", "gas")])
     for a in range(1, len(elements)):
-        if t.gravity[a] != 0:
-            lighter = densities < densities[a] if t.gravity[a] > 0 else densities > densities[a]
+        if t.fall_dir[a] != 0:
+            lighter = densities < densities[a] if t.fall_dir[a] > 0 else densities > densities[a]
             t.displace[a] = fluid & lighter
             t.displace[a, a] = 0
+            t.displace[a, 0] = 1  # every mover moves into empty cells
 
 
 @dataclass
@@ -237,7 +262,13 @@ def _resolve(ref: str, mod: str | None, ids: dict[str, int]) -> tuple[str | None
 def _empty_tables(n: int) -> Tables:
     return Tables(
         archetype=np.zeros(n, np.uint8),
-        gravity=np.zeros(n, np.int8),
+        fall_dir=np.zeros(n, np.int8),
+        accel=np.zeros(n, np.int32),
+        max_speed=np.zeros(n, np.int32),
+        friction=np.zeros(n, np.int32),
+        knock_chance=np.zeros(n, np.uint32),
+        drag_keep=np.zeros(n, np.int32),
+        carries=np.zeros(n, np.uint16),
         dispersion=np.zeros(n, np.uint8),
         rest_chance=np.zeros(n, np.uint32),
         life_frames=np.zeros(n, np.uint16),

@@ -46,8 +46,13 @@ HexColor = Annotated[
     Field(pattern=r"^#[0-9a-fA-F]{6}$", description="A colour as #rrggbb."),
 ]
 
-ARCHETYPES = ("empty", "static", "powder", "liquid", "gas")
+ARCHETYPES = ("empty", "static", "powder", "liquid", "gas", "particle")
 EMPTY_ID = "base:empty"
+#: The particle element a launched cell becomes (it carries the cell's element).
+PARTICLE_ID = "base:particle"
+#: Fastest any cell may move, in cells per frame. Bounded so that chunks updated
+#: in parallel never reach into each other's cells.
+MAX_SPEED = 16
 
 
 def _as_list(value: object) -> object:
@@ -121,6 +126,24 @@ _DISPERSION = Field(
 )
 
 
+def _gravity(default: float) -> object:
+    return Field(
+        default,
+        ge=0.0,
+        le=2.0,
+        description="Acceleration while falling (gases: while rising), in cells per frame per frame.",
+    )
+
+
+def _max_speed(default: float) -> object:
+    return Field(
+        default,
+        ge=1.0,
+        le=MAX_SPEED,
+        description=f"Terminal speed in cells per frame (1 to {MAX_SPEED}); a mover always goes at least 1.",
+    )
+
+
 class EmptyElement(_ElementBase):
     """The void between things (only ``base:empty``); its density is the air's."""
 
@@ -135,14 +158,38 @@ class StaticElement(_ElementBase):
 
 
 class PowderElement(_ElementBase):
-    """Falls, slides diagonally off slopes, piles up and sinks through lighter fluids."""
+    """Falls faster and faster, slides off slopes, piles up and sinks through lighter fluids.
+
+    A grain that lands turns part of its speed into sideways speed, which
+    ``friction`` wears down on every frame of contact. A grain that came to
+    rest stays put until the cell below empties or a moving neighbour knocks
+    it loose, which ``inertial_resistance`` makes less likely.
+    """
 
     archetype: Literal["powder"]
     density: float = _DENSITY
+    gravity: float = _gravity(0.2)
+    max_speed: float = _max_speed(8.0)
+    friction: float = Field(
+        0.6,
+        ge=0.0,
+        le=4.0,
+        description=(
+            "Friction coefficient: each frame on the ground a grain loses friction x gravity of sideways speed "
+            "(rolling down a step gains gravity), so piles settle near atan(friction): 0.6 about 31 degrees, "
+            "1 or more 45 degrees."
+        ),
+    )
+    inertial_resistance: float = Field(
+        0.1,
+        ge=0.0,
+        le=1.0,
+        description="Chance that a resting grain stays put when a moving neighbour knocks it (1 = never crumbles).",
+    )
 
 
 class LiquidElement(_ElementBase):
-    """Falls and flows sideways up to ``dispersion`` cells a frame."""
+    """Falls faster and faster, then flows sideways up to ``dispersion`` cells a frame."""
 
     archetype: Literal["liquid"]
     density: float = _DENSITY
@@ -153,6 +200,8 @@ class LiquidElement(_ElementBase):
         lt=1.0,
         description="Chance per frame that the liquid does not flow (0 = runny, 0.9 = treacle); it still falls.",
     )
+    gravity: float = _gravity(0.2)
+    max_speed: float = _max_speed(8.0)
 
 
 class GasElement(_ElementBase):
@@ -161,10 +210,31 @@ class GasElement(_ElementBase):
     archetype: Literal["gas"]
     density: float = _DENSITY
     dispersion: int = _DISPERSION
+    gravity: float = _gravity(0.02)
+    max_speed: float = _max_speed(2.0)
+
+
+class ParticleElement(_ElementBase):
+    """A free-flying cell: it moves by its velocity through empty cells only, and when
+    it hits anything it puts down the element it carries where it stopped (or vanishes,
+    carrying nothing). Launched cells and world sprays fly as particles."""
+
+    archetype: Literal["particle"]
+    gravity: float = Field(
+        0.15,
+        ge=-2.0,
+        le=2.0,
+        description="Downward acceleration in cells per frame per frame (negative: it rises, like embers).",
+    )
+    max_speed: float = _max_speed(float(MAX_SPEED))
+    drag: float = Field(0.0, ge=0.0, le=0.5, description="Share of its speed a particle loses per frame in flight.")
+    carries: ElementName | None = Field(
+        None, description="What a spawned particle of this element carries and puts down (nothing if left out)."
+    )
 
 
 Element = Annotated[
-    Union[EmptyElement, StaticElement, PowderElement, LiquidElement, GasElement],
+    Union[EmptyElement, StaticElement, PowderElement, LiquidElement, GasElement, ParticleElement],
     Field(discriminator="archetype"),
 ]
 

@@ -1,4 +1,4 @@
-"""Build a :class:`World` from a validated world file: paint the scene, set up emitters."""
+"""Build a :class:`World` from a validated world file: paint the scene, set up emitters and sprays."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from .compiler import Ruleset
 from .errors import Problem, ProblemsError
 from .shapes import circle_mask, fill_mask, line_mask, rect_mask
 from .tomlsource import TomlSource
-from .world import Emitter, World
+from .world import Emitter, Spray, World
 from .worldspec import Circle, Fill, Line, Rect, WorldFile
 
 
@@ -30,7 +30,7 @@ def shape_mask(shape: Rect | Circle | Line | Fill, cells: np.ndarray) -> np.ndar
 def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int | None = None) -> World:
     """Paint ``spec``'s scene into a new world; ProblemsError names unknown elements and lost shapes."""
     info = spec.world
-    world = World(ruleset, info.width, info.height, info.seed if seed is None else seed)
+    world = World(ruleset, info.width, info.height, info.seed if seed is None else seed, info.gravity)
     problems: list[Problem] = []
 
     def place(table: str, number: int, shape) -> tuple[int, np.ndarray] | None:
@@ -54,6 +54,14 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
         if placed is not None:
             ys, xs = np.nonzero(placed[1])
             world.emitters.append(Emitter(ys, xs, placed[0], emitter.start, emitter.stop, emitter.chance))
+    for number, spray in enumerate(spec.sprays):
+        disc = Circle(shape="circle", element=spray.element, x=spray.at[0], y=spray.at[1], radius=max(spray.radius, 0.5))
+        placed = place("sprays", number, disc)
+        if placed is not None:
+            ys, xs = np.nonzero(placed[1])
+            world.sprays.append(
+                Spray(ys, xs, placed[0], spray.direction, spray.spread, tuple(spray.speed), spray.rate, spray.start, spray.stop, number)
+            )
     if problems:
         raise ProblemsError(problems)
     return world

@@ -1,28 +1,48 @@
 """The state of a world: a few numpy arrays, painted by shapes and stepped by the kernel.
 
-Per cell: the element (uint16), a shade (uint8, picked at birth, travels with
-the cell), a lifetime timer (uint16) and a moved-this-frame mark (uint8):
-6 bytes. Building and painting a world needs no numba; stepping it does.
+Per cell (12 bytes): the element (uint16), a shade (uint8, picked at birth,
+travels with the cell), a lifetime timer (uint16), flags (uint8: moved this
+frame, reacted, loose), a velocity (two int16, in 1/256ths of a cell per frame)
+and, for flying particles, the element carried (uint16). Building and painting
+a world needs no numba; stepping it does.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from .compiler import Ruleset
+from .compiler import ARCHETYPE_CODES, SUBCELL, Ruleset, Tables
 from .hashing import (
     ROLL_BITS,
     SALT_MOVE,
     SALT_PAINT,
     SALT_REACT,
     SALT_SPAWN,
+    SALT_SPRAY,
     cell_hash,
     chance_threshold,
     frame_key,
+    mix32,
     spawn_state,
 )
+
+LOOSE = 4  # the kernel's flag for a grain in motion; new cells start loose
+
+
+class State(NamedTuple):
+    """The per-cell arrays the kernel updates, each (height, width)."""
+
+    cells: np.ndarray  # uint16: element id
+    shade: np.ndarray  # uint8: colour variation, travels with the cell
+    timer: np.ndarray  # uint16: frames of lifetime left
+    flags: np.ndarray  # uint8: kernel flags
+    vx: np.ndarray  # int16: velocity, 1/256ths of a cell per frame, right positive
+    vy: np.ndarray  # int16: velocity, down positive
+    carry: np.ndarray  # uint16: what a flying particle carries (0 elsewhere)
 
 
 @dataclass(frozen=True)
@@ -40,19 +60,69 @@ class Emitter:
         return self.start <= frame and (self.stop is None or frame < self.stop)
 
 
-class World:
-    """A grid of cells under one ruleset and seed."""
+@dataclass(frozen=True)
+class Spray:
+    """Shoots ``rate`` particles a frame from empty cells among its own, while start <= frame < stop.
 
-    def __init__(self, ruleset: Ruleset, width: int, height: int, seed: int = 0):
+    Each particle leaves at an angle within ``spread`` degrees around
+    ``direction`` (0 = right, 90 = up) and a speed between ``speeds``.
+    """
+
+    ys: np.ndarray
+    xs: np.ndarray
+    element: int  # what is sprayed (a particle element, or any element to fly as a particle)
+    direction: float
+    spread: float
+    speeds: tuple[float, float]
+    rate: float
+    start: int
+    stop: int | None
+    number: int  # which spray of the world, for independent randomness
+
+    def active(self, frame: int) -> bool:
+        return self.start <= frame and (self.stop is None or frame < self.stop)
+
+    def shots(self, seed: int, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The cells and velocities (cells/frame) of this frame's particles, cells possibly repeated."""
+        key = frame_key(seed, frame, SALT_SPRAY + self.number)
+        whole = int(self.rate)
+        count = whole + (int(mix32(key) >> (32 - ROLL_BITS)) < chance_threshold(self.rate - whole))
+        rolls = [[mix32(key ^ mix32(j * 3 + part + 1)) / 2**32 for part in range(3)] for j in range(count)]
+        picks = np.array([int(r[0] * len(self.xs)) for r in rolls], np.int64)
+        angles = [math.radians(self.direction + (r[1] - 0.5) * self.spread) for r in rolls]
+        speeds = [self.speeds[0] + r[2] * (self.speeds[1] - self.speeds[0]) for r in rolls]
+        vx = np.array([s * math.cos(a) for a, s in zip(angles, speeds)])
+        vy = np.array([-s * math.sin(a) for a, s in zip(angles, speeds)])
+        return self.ys[picks], self.xs[picks], vx, vy
+
+
+class World:
+    """A grid of cells under one ruleset and seed; ``gravity`` scales every element's."""
+
+    def __init__(self, ruleset: Ruleset, width: int, height: int, seed: int = 0, gravity: float = 1.0):
         self.ruleset = ruleset
         self.width, self.height, self.seed = width, height, seed
         self.frame = 0
-        self.cells = np.zeros((height, width), np.uint16)
-        self.shade = np.zeros((height, width), np.uint8)
-        self.timer = np.zeros((height, width), np.uint16)
-        self.moved = np.zeros((height, width), np.uint8)
+        t = ruleset.tables
+        self.tables: Tables = t if gravity == 1.0 else t._replace(accel=np.round(t.accel * gravity).astype(np.int32))
+        shape = (height, width)
+        self.state = State(
+            cells=np.zeros(shape, np.uint16),
+            shade=np.zeros(shape, np.uint8),
+            timer=np.zeros(shape, np.uint16),
+            flags=np.zeros(shape, np.uint8),
+            vx=np.zeros(shape, np.int16),
+            vy=np.zeros(shape, np.int16),
+            carry=np.zeros(shape, np.uint16),
+        )
         self.emitters: list[Emitter] = []
+        self.sprays: list[Spray] = []
         self.paint(np.ones((height, width), bool), 0)  # empty, with its own shades
+
+    @property
+    def cells(self) -> np.ndarray:
+        """The element id of every cell, (height, width)."""
+        return self.state.cells
 
     def paint(self, mask: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT) -> int:
         """Set the cells of ``mask`` to ``element`` as newly born cells; returns how many changed."""
@@ -74,13 +144,59 @@ class World:
         t = self.ruleset.tables
         h = cell_hash(frame_key(self.seed, self.frame, SALT_SPAWN ^ salt), xs, ys)
         shade, timer = spawn_state(h, int(t.life_frames[element]), int(t.life_jitter[element]))
-        self.cells[ys, xs] = element
-        self.shade[ys, xs] = shade
-        self.timer[ys, xs] = timer
+        s = self.state
+        s.cells[ys, xs] = element
+        s.shade[ys, xs] = shade
+        s.timer[ys, xs] = timer
+        s.flags[ys, xs] = LOOSE
+        s.vx[ys, xs] = s.vy[ys, xs] = s.carry[ys, xs] = 0
         return len(xs)
 
+    def launch(self, ys: np.ndarray, xs: np.ndarray, vx: np.ndarray, vy: np.ndarray) -> int:
+        """Send cells flying: each becomes a particle carrying it, at (vx, vy) cells per frame.
+
+        Empty cells and particles already in flight are left alone; returns how many flew.
+        """
+        s = self.state
+        ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
+        vx, vy = np.broadcast_to(vx, ys.shape), np.broadcast_to(vy, ys.shape)
+        keep = (s.cells[ys, xs] != 0) & (self.tables.archetype[s.cells[ys, xs]] != ARCHETYPE_CODES["particle"])
+        ys, xs, vx, vy = ys[keep], xs[keep], vx[keep], vy[keep]
+        s.carry[ys, xs] = s.cells[ys, xs]
+        s.cells[ys, xs] = self.ruleset.particle
+        self._set_velocity(ys, xs, vx, vy)
+        return len(xs)
+
+    def spawn_particles(self, ys: np.ndarray, xs: np.ndarray, element: int, vx: np.ndarray, vy: np.ndarray) -> int:
+        """Put particles into the empty ones of the given cells, flying at (vx, vy) cells per frame.
+
+        A particle element flies as itself, carrying what its ``carries`` says;
+        any other element flies as ``base:particle`` carrying it. Returns how many were placed.
+        """
+        s, t = self.state, self.tables
+        ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
+        vx, vy = np.broadcast_to(vx, ys.shape), np.broadcast_to(vy, ys.shape)
+        first = np.sort(np.unique(ys * self.width + xs, return_index=True)[1])  # one particle per cell
+        keep = first[s.cells[ys[first], xs[first]] == 0]
+        ys, xs, vx, vy = ys[keep], xs[keep], vx[keep], vy[keep]
+        if t.archetype[element] == ARCHETYPE_CODES["particle"]:
+            particle, cargo = element, int(t.carries[element])
+        else:
+            particle, cargo = self.ruleset.particle, element
+        self.paint_cells(ys, xs, particle, salt=SALT_SPRAY)
+        s.carry[ys, xs] = cargo
+        self._set_velocity(ys, xs, vx, vy)
+        return len(xs)
+
+    def _set_velocity(self, ys, xs, vx, vy) -> None:
+        limit = int(self.tables.max_speed.max(initial=SUBCELL))
+        s = self.state
+        s.vx[ys, xs] = np.clip(np.round(np.asarray(vx, float) * SUBCELL), -limit, limit)
+        s.vy[ys, xs] = np.clip(np.round(np.asarray(vy, float) * SUBCELL), -limit, limit)
+        s.flags[ys, xs] = 0
+
     def step(self) -> None:
-        """Advance one frame: emitters pour, then the kernel updates every cell."""
+        """Advance one frame: emitters pour, sprays shoot, then the kernel updates every cell."""
         from .kernel import step
 
         for number, emitter in enumerate(self.emitters):
@@ -88,12 +204,13 @@ class World:
                 self.paint_cells(
                     emitter.ys, emitter.xs, emitter.element, chance=emitter.chance, only_empty=True, salt=SALT_PAINT + 1 + number
                 )
+        for spray in self.sprays:
+            if spray.active(self.frame):
+                ys, xs, vx, vy = spray.shots(self.seed, self.frame)
+                self.spawn_particles(ys, xs, spray.element, vx, vy)
         step(
-            self.cells,
-            self.shade,
-            self.timer,
-            self.moved,
-            self.ruleset.tables,
+            self.state,
+            self.tables,
             frame_key(self.seed, self.frame, SALT_MOVE),
             frame_key(self.seed, self.frame, SALT_REACT),
             frame_key(self.seed, self.frame, SALT_SPAWN),
@@ -101,16 +218,26 @@ class World:
         )
         self.frame += 1
 
-    def counts(self) -> dict[str, int]:
-        """How many cells of each element there are, by element id."""
-        numbers = np.bincount(self.cells.ravel(), minlength=len(self.ruleset.elements))
+    def counts(self, *, carried: bool = False) -> dict[str, int]:
+        """How many cells of each element there are, by element id.
+
+        With ``carried``, a flying particle counts as what it carries, so the
+        totals show what motion alone can neither create nor lose.
+        """
+        cells = self.shown() if carried else self.cells
+        numbers = np.bincount(cells.ravel(), minlength=len(self.ruleset.elements))
         return {e.id: int(numbers[e.index]) for e in self.ruleset.elements if numbers[e.index]}
+
+    def shown(self) -> np.ndarray:
+        """The element each cell shows: its own, or for a particle, what it carries."""
+        s = self.state
+        return np.where(s.carry != 0, s.carry, s.cells)
 
     def image(self, scale: int = 1) -> np.ndarray:
         """Palette indices of every cell, each cell a ``scale`` x ``scale`` block."""
         rs = self.ruleset
-        bucket = (self.shade.astype(np.uint16) * rs.shades) >> 8
-        frame = rs.color_lut[self.cells, bucket]
+        bucket = (self.state.shade.astype(np.uint16) * rs.shades) >> 8
+        frame = rs.color_lut[self.shown(), bucket]
         if scale > 1:
             frame = np.repeat(np.repeat(frame, scale, axis=0), scale, axis=1)
         return frame

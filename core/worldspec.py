@@ -7,6 +7,7 @@
     height = 120
     seed = 7
     mods = ["sand", "water"]      # leave out to load every mod found
+    gravity = 1.0                  # scales every element's gravity
 
     [[scene]]                      # painted in order, later shapes on top
     shape = "rect"
@@ -26,6 +27,15 @@
     stop = 200
     chance = 0.5
 
+    [[sprays]]                     # shoots particles that land as their element
+    element = "water"
+    at = [20, 100]
+    direction = 80                 # degrees: 0 right, 90 up
+    spread = 10
+    speed = [3, 4]                 # cells per frame
+    rate = 2                       # particles per frame
+    stop = 300
+
     [render]
     frames = 400
     every = 2
@@ -39,9 +49,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-from .modspec import ELEMENT_REF, ModName
+from .modspec import ELEMENT_REF, MAX_SPEED, ModName
 
 #: Largest width or height (the kernel's cell hash packs x and y in 16 and 15 bits).
 MAX_SIZE = 16384
@@ -62,6 +72,15 @@ class WorldInfo(_Strict):
     seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice; same seed, same frames.")
     mods: list[ModName] | None = Field(
         None, description="Mods to load (with what they require, and 'base'); all that are found if left out."
+    )
+    gravity: float = Field(
+        1.0,
+        ge=0.0,
+        le=10.0,
+        description=(
+            "Scales every element's gravity: 1 as the mods set it, 0.5 moon-like, "
+            "0 none (movers still go one cell a frame)."
+        ),
     )
 
 
@@ -107,18 +126,21 @@ class Fill(_Shape):
 Shape = Annotated[Union[Rect, Circle, Line, Fill], Field(discriminator="shape")]
 
 
-class _Emitting(_Strict):
-    start: int = Field(0, ge=0, description="First frame of pouring.")
-    stop: int | None = Field(None, ge=1, description="Pouring ends before this frame (never, if left out).")
-    chance: float = Field(
-        0.5, gt=0, le=1, description="Chance per frame that each empty cell of the shape gets the element."
-    )
+class _Timed(_Strict):
+    start: int = Field(0, ge=0, description="First frame it is on.")
+    stop: int | None = Field(None, ge=1, description="It stops before this frame (never, if left out).")
 
     @model_validator(mode="after")
     def _stop_after_start(self):
         if self.stop is not None and self.stop <= self.start:
             raise ValueError("stop must be greater than start")
         return self
+
+
+class _Emitting(_Timed):
+    chance: float = Field(
+        0.5, gt=0, le=1, description="Chance per frame that each empty cell of the shape gets the element."
+    )
 
 
 class RectEmitter(Rect, _Emitting):
@@ -134,6 +156,38 @@ class LineEmitter(Line, _Emitting):
 
 
 Emitter = Annotated[Union[RectEmitter, CircleEmitter, LineEmitter], Field(discriminator="shape")]
+
+
+Speed = Annotated[float, Field(gt=0, le=MAX_SPEED)]
+
+
+def _as_range(value: object) -> object:
+    return [value, value] if isinstance(value, (int, float)) else value
+
+
+class Spray(_Timed):
+    """Shoots particles from around a point: a fountain, a hose, a shower of sparks.
+
+    A particle element flies as itself; any other element flies as
+    ``base:particle`` carrying it, and lands as that element.
+    """
+
+    element: ElementRef = Field(description="What flies: a particle element, or any element to carry.")
+    at: Point = Field(description="Where particles start, [x, y].")
+    radius: float = Field(0, ge=0, le=64, description="They start from empty cells within this distance of 'at'.")
+    direction: float = Field(90, ge=-360, le=360, description="Degrees: 0 right, 90 up, 180 left, -90 down.")
+    spread: float = Field(0, ge=0, le=360, description="Width of the cone of directions, in degrees.")
+    speed: Annotated[list[Speed], BeforeValidator(_as_range), Field(min_length=2, max_length=2)] = Field(
+        description=f"Cells per frame (at most {MAX_SPEED}), or [slowest, fastest].",
+        json_schema_extra={"anyOf": [{"type": "number"}, {"type": "array"}]},
+    )
+    rate: float = Field(1.0, gt=0, le=256, description="Particles per frame (a fraction: on average).")
+
+    @model_validator(mode="after")
+    def _slowest_first(self):
+        if self.speed[0] > self.speed[1]:
+            raise ValueError("speed: give [slowest, fastest]")
+        return self
 
 
 class RenderSettings(_Strict):
@@ -154,4 +208,5 @@ class WorldFile(_Strict):
     world: WorldInfo = Field(description="Size, seed and mods.")
     scene: list[Shape] = Field(default_factory=list, description="Shapes painted in order before the first frame.")
     emitters: list[Emitter] = Field(default_factory=list, description="Shapes that pour an element over frames.")
+    sprays: list[Spray] = Field(default_factory=list, description="Sources of flying particles.")
     render: RenderSettings = Field(default_factory=RenderSettings, description="How 'sandmod render' records.")

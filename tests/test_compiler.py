@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from conftest import write_mods
-from sandmod.compiler import ARCHETYPE_CODES
+from sandmod.compiler import ARCHETYPE_CODES, SUBCELL
 from sandmod.errors import ProblemsError
 from sandmod.hashing import ROLL_ONE
 from sandmod.loading import load_ruleset
@@ -33,7 +33,11 @@ def test_tables_hold_each_elements_parameters(ruleset):
     t, i = ruleset.tables, ruleset.index
     assert t.archetype[i("sand")] == ARCHETYPE_CODES["powder"]
     assert t.archetype[i("stone")] == ARCHETYPE_CODES["static"]
-    assert (t.gravity[i("sand")], t.gravity[i("water")], t.gravity[i("steam")], t.gravity[i("stone")]) == (1, 1, -1, 0)
+    assert (t.fall_dir[i("sand")], t.fall_dir[i("water")], t.fall_dir[i("steam")], t.fall_dir[i("stone")]) == (1, 1, -1, 0)
+    assert t.accel[i("sand")] == round(0.2 * SUBCELL) and t.max_speed[i("sand")] == 8 * SUBCELL
+    assert t.friction[i("coal")] == round(1.6 * 256) and t.knock_chance[i("coal")] == round((1 - 0.9) * ROLL_ONE)
+    assert t.archetype[i("particle")] == ARCHETYPE_CODES["particle"] and t.carries[i("particle")] == 0
+    assert ruleset.particle == i("base:particle")
     assert t.dispersion[i("water")] == 4 and t.dispersion[i("lava")] == 2
     assert t.rest_chance[i("lava")] == round(0.6 * ROLL_ONE)
     assert t.life_frames[i("steam")] == 220 and t.life_into[i("steam")] == i("water")

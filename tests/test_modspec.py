@@ -50,11 +50,11 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.lava]\narchetype = "liquid"\ncolor = "#ff0000"\ndensity = 5\ndispersion = 1\nglow = true\n',
             "m.toml:9: elements.lava.glow: unknown field; allowed here: description, color, shade, tags, "
-            "lifetime, override, archetype, density, dispersion, viscosity",
+            "lifetime, override, archetype, density, dispersion, viscosity, gravity, max_speed",
         ),
         (
             '[elements.rock]\narchetype = "stony"\ncolor = "#333333"\n',
-            "m.toml:5: elements.rock.archetype: must be one of 'empty', 'static', 'powder', 'liquid', 'gas' (got 'stony')",
+            "m.toml:5: elements.rock.archetype: must be one of 'empty', 'static', 'powder', 'liquid', 'gas', 'particle' (got 'stony')",
         ),
         ('[elements.dust]\narchetype = "powder"\ncolor = "#111111"\n', "m.toml:4: elements.dust.density: required field is missing"),
         ('[elements.dust]\ncolor = "#111111"\n', "m.toml:4: elements.dust: required field 'archetype' is missing"),
