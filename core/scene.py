@@ -33,11 +33,12 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
     world = World(ruleset, info.width, info.height, info.seed if seed is None else seed, info.gravity)
     problems: list[Problem] = []
 
-    def place(table: str, number: int, shape) -> tuple[int, np.ndarray] | None:
-        """The element and the cells of a scene shape or emitter, or None (problem noted)."""
+    def place(table: str, number: int, shape, field: tuple = (), what: str = "the shape") -> tuple[int, np.ndarray] | None:
+        """The element and the cells of a scene shape, emitter or spray, or None (problem noted)."""
         mask = shape_mask(shape, world.cells)
         if not mask.any():
-            problems.append(source.problem((table, number), f"the shape lies outside the {info.width}x{info.height} world"))
+            outside = f"{what} lies outside the {info.width}x{info.height} world"
+            problems.append(source.problem((table, number) + field, outside))
         try:
             index = ruleset.index(shape.element)
         except KeyError as exc:
@@ -56,7 +57,7 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
             world.emitters.append(Emitter(ys, xs, placed[0], emitter.start, emitter.stop, emitter.chance))
     for number, spray in enumerate(spec.sprays):
         disc = Circle(shape="circle", element=spray.element, x=spray.at[0], y=spray.at[1], radius=max(spray.radius, 0.5))
-        placed = place("sprays", number, disc)
+        placed = place("sprays", number, disc, ("at",), "the start")
         if placed is not None:
             ys, xs = np.nonzero(placed[1])
             world.sprays.append(

@@ -49,7 +49,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from .modspec import ELEMENT_REF, MAX_SPEED, ModName
 
@@ -181,13 +181,16 @@ class Spray(_Timed):
         description=f"Cells per frame (at most {MAX_SPEED}), or [slowest, fastest].",
         json_schema_extra={"anyOf": [{"type": "number"}, {"type": "array"}]},
     )
-    rate: float = Field(1.0, gt=0, le=256, description="Particles per frame (a fraction: on average).")
+    rate: float = Field(
+        1.0, gt=0, le=256, description="Particles per frame (a fraction: on average); at most one per free start cell."
+    )
 
-    @model_validator(mode="after")
-    def _slowest_first(self):
-        if self.speed[0] > self.speed[1]:
-            raise ValueError("speed: give [slowest, fastest]")
-        return self
+    @field_validator("speed")
+    @classmethod
+    def _slowest_first(cls, speed: list[float]) -> list[float]:
+        if speed[0] > speed[1]:
+            raise ValueError("give [slowest, fastest]")
+        return speed
 
 
 class RenderSettings(_Strict):

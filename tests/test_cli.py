@@ -94,7 +94,7 @@ def test_same_seed_renders_the_same_file_twice():
     assert Path("a.gif").read_bytes() == Path("b.gif").read_bytes()
 
 
-@pytest.mark.parametrize("name", ["hourglass", "lava_lake", "acid_wall"])
+@pytest.mark.parametrize("name", sorted(p.stem for p in EXAMPLES.glob("*.toml")))
 def test_each_example_world_renders(name):
     result = invoke("render", str(EXAMPLES / f"{name}.toml"), "-o", f"{name}.gif", "--frames", "40", "--scale", "1")
     assert result.exit_code == 0, result.output
@@ -301,3 +301,65 @@ def test_a_shape_outside_the_world_is_an_error():
     result = invoke("validate", "w.toml")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == ["w.toml:5: scene.0: the shape lies outside the 10x10 world"]
+
+
+def test_bad_gravity_and_sprays_are_named_with_their_lines():
+    Path("spray.toml").write_text(
+        textwrap.dedent(
+            """
+            [world]
+            width = 40
+            height = 30
+            gravity = -1
+
+            [[sprays]]
+            element = "water"
+            at = [5, 5]
+            speed = [5, 2]
+
+            [[sprays]]
+            element = "water"
+            at = [5, 5]
+            speed = 40
+            rate = 0
+            """
+        ).lstrip()
+    )
+    result = invoke("render", "spray.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "spray.toml:4: world.gravity: must be >= 0 (got -1)",
+        "spray.toml:9: sprays.0.speed: give [slowest, fastest]",
+        "spray.toml:14: sprays.1.speed: must be <= 16 (got 40)",
+        "spray.toml:15: sprays.1.rate: must be > 0 (got 0)",
+    ]
+
+
+def test_a_spray_must_start_inside_the_world_and_name_a_known_element():
+    Path("spray.toml").write_text(
+        '[world]\nwidth = 40\nheight = 30\n\n[[sprays]]\nelement = "watr"\nat = [5, 5]\nspeed = 3\n\n'
+        '[[sprays]]\nelement = "water"\nat = [50, 5]\nspeed = 3\n'
+    )
+    result = invoke("render", "spray.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "spray.toml:6: sprays.0.element: unknown element 'watr' (did you mean 'water'?)",
+        "spray.toml:12: sprays.1.at: the start lies outside the 40x30 world",
+    ]
+
+
+def test_a_spray_fires_particles_that_land_as_their_element():
+    Path("spray.toml").write_text(
+        POURING.format(element="water").replace("[[emitters]]", "[[sprays]]\nelement = \"sand\"\nat = [4, 20]\n"
+        "radius = 2\ndirection = 45\nspread = 10\nspeed = [2, 3]\nrate = 2\nstop = 10\n\n[[emitters]]")
+    )
+    from sandmod.loading import load_world
+
+    world = load_world("spray.toml").world
+    world.step()
+    assert world.counts()["base:particle"] >= 1 and world.counts(carried=True)["sand:sand"] == world.counts()["base:particle"]
+    for _ in range(80):
+        world.step()
+    sand = world.counts()["sand:sand"]
+    assert 12 <= sand <= 20 and "base:particle" not in world.counts()
+    assert np.nonzero(world.cells == world.ruleset.index("sand"))[1].min() > 3  # they flew right, away from the nozzle

@@ -124,7 +124,7 @@ def list_(as_json, mod_dirs) -> None:
     _table(("ELEMENT", "ARCHETYPE", "DENSITY", "TAGS", "DESCRIPTION"), rows)
     click.echo()
     rows = [
-        (f"{r['a']} + {r['b']}", f"{r['a_becomes'] or '(same)'} + {r['b_becomes'] or '(same)'}", f"{r['chance']:.0%}", r["mod"])
+        (f"{r['a']} + {r['b']}", f"{r['a_becomes'] or '(same)'} + {r['b_becomes'] or '(same)'}", f"{r['chance'] * 100:.3g}%", r["mod"])
         for r in reactions
     ]
     _table(("REACTION", "BECOMES", "CHANCE", "MOD"), rows)
