@@ -6,6 +6,7 @@ import hashlib
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from sandmod import hashing
 from sandmod.loading import load_world
@@ -13,8 +14,8 @@ from sandmod.loading import load_world
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
 
-def digests(seed: int | None, frames: int = 60) -> list[str]:
-    world = load_world(EXAMPLES / "lava_lake.toml", seed=seed).world
+def digests(seed: int | None, frames: int = 60, name: str = "lava_lake") -> list[str]:
+    world = load_world(EXAMPLES / f"{name}.toml", seed=seed).world
     out = []
     for _ in range(frames):
         world.step()
@@ -25,8 +26,9 @@ def digests(seed: int | None, frames: int = 60) -> list[str]:
     return out
 
 
-def test_same_seed_gives_identical_frames():
-    assert digests(None) == digests(None)
+@pytest.mark.parametrize("name", ["lava_lake", "fountain"])
+def test_same_seed_gives_identical_frames(name):
+    assert digests(None, name=name) == digests(None, name=name)
 
 
 def test_another_seed_gives_other_frames():
