@@ -37,6 +37,7 @@ class Tables(NamedTuple):
     accel: np.ndarray  # int32[n]: gravity along fall_dir (particles: downwards), SUBCELL units
     max_speed: np.ndarray  # int32[n]: terminal speed, SUBCELL units
     friction: np.ndarray  # int32[n]: friction coefficient, of 256: braking = friction * accel
+    impact_share: np.ndarray  # int32[n]: share of landing speed turned sideways, of 256
     knock_chance: np.ndarray  # uint32[n]: roll threshold for a knock to loosen a resting grain
     drag_keep: np.ndarray  # int32[n]: particle speed kept per frame, of 256
     carries: np.ndarray  # uint16[n]: what a spawned particle element carries (0 = nothing)
@@ -157,7 +158,9 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
         carried = getattr(info.spec, "carries", None)
         if carried is not None:
             what = resolve(carried, by_mod[d.mod], d.loc + ("carries",))
-            if what is not None:
+            if what is not None and elements[what].spec.archetype == "particle":
+                problems.append(d.source.problem(d.loc + ("carries",), f"a particle cannot carry a particle ('{elements[what].id}')"))
+            elif what is not None:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
     reactions = _compile_reactions(mods, elements, t, resolve, problems)
@@ -178,6 +181,7 @@ def _fill_element(t: Tables, info: ElementInfo, d: "_Definition", problems: list
     t.accel[i] = round(getattr(spec, "gravity", 0.0) * SUBCELL)
     t.max_speed[i] = round(getattr(spec, "max_speed", 1.0) * SUBCELL)
     t.friction[i] = round(getattr(spec, "friction", 0.0) * 256)
+    t.impact_share[i] = round(getattr(spec, "impact_spread", 0.0) * 256)
     t.knock_chance[i] = chance_threshold(1.0 - getattr(spec, "inertial_resistance", 1.0))
     t.drag_keep[i] = round((1.0 - getattr(spec, "drag", 0.0)) * 256)
 
@@ -266,6 +270,7 @@ def _empty_tables(n: int) -> Tables:
         accel=np.zeros(n, np.int32),
         max_speed=np.zeros(n, np.int32),
         friction=np.zeros(n, np.int32),
+        impact_share=np.zeros(n, np.int32),
         knock_chance=np.zeros(n, np.uint32),
         drag_keep=np.zeros(n, np.int32),
         carries=np.zeros(n, np.uint16),

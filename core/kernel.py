@@ -75,9 +75,8 @@ REACTED = 2  # reacted this frame
 LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
 DONE = MOVED | REACTED
 
-# Powder on landing: this share (of 256) of the landing speed becomes sideways
+# Powder on landing: its impact_share of the landing speed becomes sideways
 # speed, and at least MIN_SLIDE; sideways speed below STOP_SPEED comes to rest.
-IMPACT_SHARE = 64
 MIN_SLIDE = SUBCELL // 4
 STOP_SPEED = SUBCELL // 8
 KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
@@ -121,7 +120,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
     cells, shade, timer, flags, vx, vy, carry = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry
     height, width = cells.shape
     archetype, fall_dir, accel, max_speed = t.archetype, t.fall_dir, t.accel, t.max_speed
-    friction, knock_chance, drag_keep = t.friction, t.knock_chance, t.drag_keep
+    friction, impact_share, knock_chance, drag_keep = t.friction, t.impact_share, t.knock_chance, t.drag_keep
     dispersion, rest_chance = t.dispersion, t.rest_chance
     life_frames, life_jitter, life_into = t.life_frames, t.life_jitter, t.life_into
     reactive, displace = t.reactive, t.displace
@@ -232,7 +231,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
                     side = (1 if cvx > 0 else -1) if cvx != 0 else (1 if h & 1 else -1)
                     impact = cvy * g
                     if impact > 0 or u == 0:  # landing, or freshly placed
-                        u = min(max(u + ((impact * IMPACT_SHARE) >> 8), MIN_SLIDE), max_speed[e])
+                        u = min(max(u + ((impact * impact_share[e]) >> 8), MIN_SLIDE), max_speed[e])
                     cvy = 0
                     cvx = side * u
                     if u >= STOP_SPEED:

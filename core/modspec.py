@@ -176,9 +176,15 @@ class PowderElement(_ElementBase):
         le=4.0,
         description=(
             "Friction coefficient: each frame on the ground a grain loses friction x gravity of sideways speed "
-            "(rolling down a step gains gravity), so piles settle near atan(friction): 0.6 about 31 degrees, "
-            "1 or more 45 degrees."
+            "(rolling down a step gains gravity), so piles settle at or a little below atan(friction), "
+            "never above 45 degrees: sand (0.6) about 32, coal (1.6) about 41."
         ),
+    )
+    impact_spread: float = Field(
+        0.25,
+        ge=0.0,
+        le=1.0,
+        description="Share of its landing speed a grain turns into sideways speed (0 = lands dead, 1 = all of it).",
     )
     inertial_resistance: float = Field(
         0.1,

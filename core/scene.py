@@ -58,7 +58,9 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
     for number, spray in enumerate(spec.sprays):
         disc = Circle(shape="circle", element=spray.element, x=spray.at[0], y=spray.at[1], radius=max(spray.radius, 0.5))
         placed = place("sprays", number, disc, ("at",), "the start")
-        if placed is not None:
+        if placed is not None and placed[0] == 0:
+            problems.append(source.problem(("sprays", number, "element"), "spray an element, not 'empty'"))
+        elif placed is not None:
             ys, xs = np.nonzero(placed[1])
             world.sprays.append(
                 Spray(ys, xs, placed[0], spray.direction, spray.spread, tuple(spray.speed), spray.rate, spray.start, spray.stop, number)

@@ -346,6 +346,8 @@ def test_a_spray_must_start_inside_the_world_and_name_a_known_element():
         "spray.toml:6: sprays.0.element: unknown element 'watr' (did you mean 'water'?)",
         "spray.toml:12: sprays.1.at: the start lies outside the 40x30 world",
     ]
+    Path("spray.toml").write_text('[world]\nwidth = 40\nheight = 30\n\n[[sprays]]\nelement = "empty"\nat = [5, 5]\nspeed = 3\n')
+    assert invoke("render", "spray.toml").stderr.splitlines() == ["spray.toml:6: sprays.0.element: spray an element, not 'empty'"]
 
 
 def test_a_spray_fires_particles_that_land_as_their_element():

@@ -281,3 +281,22 @@ def test_empty_must_stay_empty(registry, tmp_path):
         },
     )
     assert problems == ["mods/void.toml:5: elements.base:empty.archetype: 'base:empty' must be 'empty'"]
+
+
+def test_a_particle_cannot_carry_a_particle(registry, tmp_path):
+    problems = problems_of(
+        registry,
+        tmp_path,
+        {
+            "sparks.toml": """
+                [mod]
+                name = "sparks"
+                [elements.spark]
+                archetype = "particle"
+                color = "#ffdd00"
+                carries = "base:particle"
+            """
+        },
+        ["sparks"],
+    )
+    assert [p.split("/")[-1] for p in problems] == ["sparks.toml:6: elements.spark.carries: a particle cannot carry a particle ('base:particle')"]

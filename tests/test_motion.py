@@ -77,6 +77,31 @@ def test_a_high_drop_spreads_wider_than_a_low_one(ruleset):
     assert high.std() > 1.3 * low.std()
 
 
+def test_impact_spread_decides_how_much_landing_speed_turns_sideways(registry, tmp_path):
+    folder = write_mods(
+        tmp_path,
+        {
+            "drops.toml": """
+                [mod]
+                name = "drops"
+                [elements.dead]
+                archetype = "powder"
+                color = "#ffffff"
+                density = 1500
+                impact_spread = 0
+                [elements.lively]
+                archetype = "powder"
+                color = "#000000"
+                density = 1500
+                impact_spread = 1
+            """
+        },
+    )
+    drops = load_ruleset(["drops"], [folder], registry)
+    dead, lively = pour(drops, "dead", 100, frames=200), pour(drops, "lively", 100, frames=200)
+    assert lively.std() > 2 * dead.std()
+
+
 def test_sand_dirt_and_coal_piles_have_different_slopes(ruleset):
     def steepness(name):
         columns = pour(ruleset, name, 20)
