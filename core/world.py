@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .compiler import ARCHETYPE_CODES, SUBCELL, Ruleset, Tables
+from .modspec import MAX_SPEED
 from .hashing import (
     ROLL_BITS,
     SALT_MOVE,
@@ -189,7 +190,7 @@ class World:
         return len(xs)
 
     def _set_velocity(self, ys, xs, vx, vy) -> None:
-        limit = int(self.tables.max_speed.max(initial=SUBCELL))
+        limit = MAX_SPEED * SUBCELL  # the kernel then holds each particle to its own max_speed
         s = self.state
         s.vx[ys, xs] = np.clip(np.round(np.asarray(vx, float) * SUBCELL), -limit, limit)
         s.vy[ys, xs] = np.clip(np.round(np.asarray(vy, float) * SUBCELL), -limit, limit)
