@@ -59,6 +59,7 @@ from numba import njit  # noqa: E402
 
 from . import hashing, traversal  # noqa: E402
 from .compiler import ARCHETYPE_CODES, SUBCELL  # noqa: E402
+from .world import LOOSE, MOVED, REACTED  # noqa: E402
 
 _mix32 = njit(inline="always", cache=True)(hashing.mix32)
 _spawn_state = njit(inline="always", cache=True)(hashing.spawn_state)
@@ -69,11 +70,7 @@ POWDER = ARCHETYPE_CODES["powder"]
 LIQUID = ARCHETYPE_CODES["liquid"]
 PARTICLE = ARCHETYPE_CODES["particle"]
 
-# Bits of the per-cell flags.
-MOVED = 1  # moved or changed this frame
-REACTED = 2  # reacted this frame
-LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
-DONE = MOVED | REACTED
+DONE = MOVED | REACTED  # flag bits (defined beside world.State) of a cell finished this frame
 
 # Powder on landing: its impact_share of the landing speed becomes sideways
 # speed, and at least MIN_SLIDE; sideways speed below STOP_SPEED comes to rest.
@@ -198,8 +195,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
             only_empty = kind == PARTICLE
             tries = 0
             d0x = d0y = d1x = d1y = d2x = d2y = d3x = d3y = 0
-            r = _mix32(h ^ SALT_ROUND)  # rolls for rounding speeds to cells
             if kind == PARTICLE:
+                r = _mix32(h ^ SALT_ROUND)  # rolls for rounding speeds to cells
                 loose = 0  # set when it lands
                 cvy += accel[e]
                 keep = drag_keep[e]
@@ -216,6 +213,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
                 if 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x]):
                     # Falling (rising): speed up, go at least one cell, drift sideways.
                     falling = True
+                    r = _mix32(h ^ SALT_ROUND)
                     speed = min(cvy * g + accel[e], max_speed[e])
                     cvy = speed * g
                     d0x = _cells_moved(cvx, (r >> 8) & 255)
@@ -235,7 +233,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
                     cvy = 0
                     cvx = side * u
                     if u >= STOP_SPEED:
-                        slide = _cells_moved(u, r & 255)
+                        slide = _cells_moved(u, _mix32(h ^ SALT_ROUND) & 255)
                         coasting = slide == 0  # too slow to cross a cell this frame
                         d0x, d0y = side, g  # roll down the slope
                         d1x = side * slide  # slide along the ground

@@ -31,7 +31,15 @@ from .hashing import (
     spawn_state,
 )
 
-LOOSE = 4  # the kernel's flag for a grain in motion; new cells start loose
+# Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame.
+MOVED = 1  # moved or changed this frame
+REACTED = 2  # reacted this frame
+LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
+
+
+def _on(start: int, stop: int | None, frame: int) -> bool:
+    """Is a source that runs from ``start`` until before ``stop`` (never ending if None) on at ``frame``?"""
+    return start <= frame and (stop is None or frame < stop)
 
 
 class State(NamedTuple):
@@ -58,7 +66,7 @@ class Emitter:
     chance: float
 
     def active(self, frame: int) -> bool:
-        return self.start <= frame and (self.stop is None or frame < self.stop)
+        return _on(self.start, self.stop, frame)
 
 
 @dataclass(frozen=True)
@@ -81,7 +89,7 @@ class Spray:
     number: int  # which spray of the world, for independent randomness
 
     def active(self, frame: int) -> bool:
-        return self.start <= frame and (self.stop is None or frame < self.stop)
+        return _on(self.start, self.stop, frame)
 
     def shots(self, seed: int, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The cells and velocities (cells/frame) of this frame's particles, cells possibly repeated."""
