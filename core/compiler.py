@@ -27,6 +27,17 @@ ARCHETYPE_CODES = {"empty": 0, "static": 1, "powder": 2, "liquid": 3, "gas": 4, 
 SUBCELL = 256
 #: Most elements a ruleset may hold (palette renders use 256 colours).
 MAX_ELEMENTS = 256
+#: Temperatures are fixed-point: this many units make one degree Celsius.
+TEMP_ONE = 16
+#: Heat capacities are fixed-point: this many units make a heat_capacity of 1.
+CAP_ONE = 256
+#: Columns of a blast row (Tables.blast, and the world's queue of explosions).
+BLAST_X, BLAST_Y, BLAST_RADIUS, BLAST_STRENGTH, BLAST_LEAVES, BLAST_LEAVES_CHANCE = range(6)
+BLAST_FLING, BLAST_SPEED, BLAST_HEAT, BLAST_SCORCH = range(6, 10)
+BLAST_COLUMNS = 10
+#: Bits of Tables.thermal: what the kernel checks about a cell's heat each frame.
+HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
+_NO_LIMIT = 2**62
 
 
 class Tables(NamedTuple):
@@ -51,6 +62,35 @@ class Tables(NamedTuple):
     react_chance: np.ndarray  # uint32[n, n]: roll threshold per frame of contact
     react_into_a: np.ndarray  # uint16[n, n]: what a becomes
     react_into_b: np.ndarray  # uint16[n, n]: what b becomes
+    react_tsum_min: np.ndarray  # int32[n, n]: lowest T_a + T_b (TEMP_ONE units) at which the pair reacts
+    react_tsum_max: np.ndarray  # int32[n, n]: highest T_a + T_b
+    react_heat: np.ndarray  # int32[n, n]: temperature added to a cell that changes, TEMP_ONE units
+    # Heat. A cell stores its heat energy, capacity x temperature.
+    heat_cap: np.ndarray  # int64[n]: heat capacity, CAP_ONE units
+    heat_recip: np.ndarray  # int64[n]: 2**32 / heat_cap, so that temperature = (energy * recip) >> 32
+    conductance: np.ndarray  # int64[n]: conductivity x capacity / 4, in 1/256ths of CAP_ONE
+    cooling: np.ndarray  # int64[n]: share of the gap to the air's temperature lost per frame, of 256
+    temp_start: np.ndarray  # int32[n]: temperature of a new cell, TEMP_ONE units
+    thermal: np.ndarray  # uint8[n]: HEATED | COOLED | FLAMMABLE | IGNITES | EXPLOSIVE
+    hot_limit: np.ndarray  # int64[n]: energy above which it becomes heated_into
+    heated_into: np.ndarray  # uint16[n]
+    cold_limit: np.ndarray  # int64[n]: energy below which it becomes cooled_into
+    cooled_into: np.ndarray  # uint16[n]
+    # Fire.
+    ignite_limit: np.ndarray  # int64[n]: energy at or above which a flammable cell catches fire
+    catch_chance: np.ndarray  # uint32[n]: roll threshold to catch from a touching flame
+    burn_frames: np.ndarray  # uint16[n]
+    burn_jitter: np.ndarray  # uint16[n]
+    burn_limit: np.ndarray  # int64[n]: energy a burning cell heats itself up to
+    burn_heat: np.ndarray  # int64[n]: energy a burning cell gains per frame
+    flame: np.ndarray  # uint16[n]: what a burning cell gives off (0 = nothing)
+    flame_chance: np.ndarray  # uint32[n]
+    ash: np.ndarray  # uint16[n]: what a burnt-out cell leaves
+    ash_chance: np.ndarray  # uint32[n]
+    extinguishes: np.ndarray  # uint8[n]: puts out burning neighbours
+    # Explosions.
+    resistance: np.ndarray  # int64[n]: explosion resistance, 1/256ths
+    blast: np.ndarray  # int64[n, BLAST_COLUMNS]: the element's explosion (radius 0: none)
 
 
 @dataclass(frozen=True)
@@ -92,7 +132,7 @@ class Ruleset:
     reactions: tuple[CompiledReaction, ...]
     tables: Tables
     palette: bytes  # 768 bytes, 256 RGB triples
-    color_lut: np.ndarray  # uint8[n, shades]: palette index per element and shade bucket
+    looks: "Looks"  # palette indices per element: shades, scorched shades, glow levels
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
 
     @property
@@ -102,7 +142,7 @@ class Ruleset:
 
     @property
     def shades(self) -> int:
-        return self.color_lut.shape[1]
+        return self.looks.shades
 
     def index(self, ref: str) -> int:
         """The numeric id of ``ref`` ('sand' or 'sand:sand'); KeyError with a message if unknown."""
@@ -135,7 +175,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     by_mod = {m.name: m for m in mods}
 
     def resolve(ref: str, mod: LoadedMod, loc: tuple) -> int | None:
-        found, message = _resolve(ref, mod.name, ids)
+        found, message = _resolve(ref, mod.name, ids, (BASE_MOD, *mod.spec.mod.requires))
         if found is None:
             problems.append(mod.source.problem(loc, message))
             return None
@@ -149,12 +189,16 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     for info in elements:
         d = defs[info.id]
         _fill_element(t, info, d, problems)
+        mod = by_mod[d.mod]
         if info.spec.lifetime is not None:
-            into = resolve(info.spec.lifetime.becomes, by_mod[d.mod], d.loc + ("lifetime", "becomes"))
+            into = resolve(info.spec.lifetime.becomes, mod, d.loc + ("lifetime", "becomes"))
             if into is not None:
                 t.life_frames[info.index] = info.spec.lifetime.frames
                 t.life_jitter[info.index] = info.spec.lifetime.jitter
                 t.life_into[info.index] = into
+        _fill_heat(t, info, lambda ref, *field: resolve(ref, mod, d.loc + field))
+        if info.index == 0 and any(getattr(info.spec, f) for f in ("heated", "cooled", "flammable", "ignites", "extinguishes")):
+            problems.append(d.source.problem(d.loc, "the empty cell cannot change, burn, light or put out fires"))
         carried = getattr(info.spec, "carries", None)
         if carried is not None:
             what = resolve(carried, by_mod[d.mod], d.loc + ("carries",))
@@ -166,8 +210,8 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     reactions = _compile_reactions(mods, elements, t, resolve, problems)
     if problems:
         raise ProblemsError(problems)
-    palette, lut = _palette(elements)
-    return Ruleset(tuple(mods), elements, reactions, t, palette, lut, ids)
+    palette, looks = _palette(elements)
+    return Ruleset(tuple(mods), elements, reactions, t, palette, looks, ids)
 
 
 def _fill_element(t: Tables, info: ElementInfo, d: "_Definition", problems: list[Problem]) -> None:
@@ -184,6 +228,72 @@ def _fill_element(t: Tables, info: ElementInfo, d: "_Definition", problems: list
     t.impact_share[i] = round(getattr(spec, "impact_spread", 0.0) * 256)
     t.knock_chance[i] = chance_threshold(1.0 - getattr(spec, "inertial_resistance", 1.0))
     t.drag_keep[i] = round((1.0 - getattr(spec, "drag", 0.0)) * 256)
+    resistance = spec.explosion_resistance
+    if resistance is None:
+        resistance = DEFAULT_RESISTANCE[spec.archetype]
+    t.resistance[i] = round(resistance * 256)
+
+
+#: explosion_resistance when an element does not give one.
+DEFAULT_RESISTANCE = {"empty": 0.0, "gas": 0.0, "particle": 0.0, "powder": 0.5, "liquid": 0.5, "static": 2.0}
+
+
+def temperature_units(celsius: float) -> int:
+    """Degrees Celsius in the kernel's fixed point."""
+    return round(celsius * TEMP_ONE)
+
+
+def _fill_heat(t: Tables, info: ElementInfo, resolve) -> None:
+    """Heat, phase changes, fire and explosions of one element; ``resolve(ref, *field)`` names others."""
+    spec, i = info.spec, info.index
+    cap = max(1, round(spec.heat_capacity * CAP_ONE))
+    t.heat_cap[i] = cap
+    t.heat_recip[i] = (1 << 32) // cap + 1
+    t.conductance[i] = round(spec.conductivity * cap * 64)  # x 256 / 4: each side of a pair moves < 1/4 of the gap
+    t.cooling[i] = round(spec.cooling * 256)
+    t.temp_start[i] = temperature_units(spec.temperature)
+    if spec.heated is not None and (into := resolve(spec.heated.becomes, "heated", "becomes")) is not None:
+        t.thermal[i] |= HEATED
+        t.hot_limit[i] = cap * temperature_units(spec.heated.above)
+        t.heated_into[i] = into
+    if spec.cooled is not None and (into := resolve(spec.cooled.becomes, "cooled", "becomes")) is not None:
+        t.thermal[i] |= COOLED
+        t.cold_limit[i] = cap * temperature_units(spec.cooled.below)
+        t.cooled_into[i] = into
+    if spec.ignites:
+        t.thermal[i] |= IGNITES
+    t.extinguishes[i] = spec.extinguishes
+    fire = spec.flammable
+    if fire is not None:
+        t.thermal[i] |= FLAMMABLE
+        t.ignite_limit[i] = cap * temperature_units(fire.ignites_at)
+        t.catch_chance[i] = chance_threshold(fire.catch_chance)
+        t.burn_frames[i], t.burn_jitter[i] = fire.burn_time, fire.burn_jitter
+        t.burn_limit[i] = cap * temperature_units(fire.burn_temperature)
+        t.burn_heat[i] = cap * temperature_units(fire.heat)
+        if fire.flame is not None:
+            t.flame[i] = resolve(fire.flame, "flammable", "flame") or 0
+            t.flame_chance[i] = chance_threshold(fire.flame_chance)
+        t.ash[i] = resolve(fire.leaves, "flammable", "leaves") or 0
+        t.ash_chance[i] = chance_threshold(fire.leaves_chance)
+    if spec.explosion is not None:
+        t.thermal[i] |= EXPLOSIVE
+        t.blast[i] = blast_row(spec.explosion, resolve(spec.explosion.leaves, "explosion", "leaves") or 0)
+
+
+def blast_row(explosion, leaves: int, x: int = 0, y: int = 0) -> np.ndarray:
+    """An explosion (a :class:`~sandmod.modspec.Explosion`) as a row of the kernel's blast table."""
+    row = np.zeros(BLAST_COLUMNS, np.int64)
+    row[BLAST_X], row[BLAST_Y] = x, y
+    row[BLAST_RADIUS] = explosion.radius
+    row[BLAST_STRENGTH] = round(explosion.strength * 256)
+    row[BLAST_LEAVES] = leaves
+    row[BLAST_LEAVES_CHANCE] = chance_threshold(explosion.leaves_chance)
+    row[BLAST_FLING] = chance_threshold(explosion.fling)
+    row[BLAST_SPEED] = round(explosion.speed * SUBCELL)
+    row[BLAST_HEAT] = -(2**31) if explosion.heat is None else temperature_units(explosion.heat)
+    row[BLAST_SCORCH] = explosion.scorch
+    return row
 
 
 def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
@@ -244,8 +354,12 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dic
     return defs
 
 
-def _resolve(ref: str, mod: str | None, ids: dict[str, int]) -> tuple[str | None, str]:
-    """Resolve an element reference; returns (id, "") or (None, message)."""
+def _resolve(ref: str, mod: str | None, ids: dict[str, int], requires: Sequence[str] = ()) -> tuple[str | None, str]:
+    """Resolve an element reference; returns (id, "") or (None, message).
+
+    A bare name means the element of that name in ``mod`` itself, else in the
+    mods it requires (one of them), else in any loaded mod (one of them).
+    """
     if ":" in ref:
         if ref in ids:
             return ref, ""
@@ -253,6 +367,9 @@ def _resolve(ref: str, mod: str | None, ids: dict[str, int]) -> tuple[str | None
     else:
         if mod is not None and f"{mod}:{ref}" in ids:
             return f"{mod}:{ref}", ""
+        required = [f"{m}:{ref}" for m in requires if f"{m}:{ref}" in ids]
+        if len(required) == 1:
+            return required[0], ""
         matches = [i for i in ids if i.split(":", 1)[1] == ref]
         if len(matches) == 1:
             return matches[0], ""
@@ -284,6 +401,32 @@ def _empty_tables(n: int) -> Tables:
         react_chance=np.zeros((n, n), np.uint32),
         react_into_a=np.zeros((n, n), np.uint16),
         react_into_b=np.zeros((n, n), np.uint16),
+        react_tsum_min=np.full((n, n), -(2**31), np.int32),
+        react_tsum_max=np.full((n, n), 2**31 - 1, np.int32),
+        react_heat=np.zeros((n, n), np.int32),
+        heat_cap=np.ones(n, np.int64),
+        heat_recip=np.ones(n, np.int64),
+        conductance=np.zeros(n, np.int64),
+        cooling=np.zeros(n, np.int64),
+        temp_start=np.zeros(n, np.int32),
+        thermal=np.zeros(n, np.uint8),
+        hot_limit=np.full(n, _NO_LIMIT, np.int64),
+        heated_into=np.zeros(n, np.uint16),
+        cold_limit=np.full(n, -_NO_LIMIT, np.int64),
+        cooled_into=np.zeros(n, np.uint16),
+        ignite_limit=np.full(n, _NO_LIMIT, np.int64),
+        catch_chance=np.zeros(n, np.uint32),
+        burn_frames=np.zeros(n, np.uint16),
+        burn_jitter=np.zeros(n, np.uint16),
+        burn_limit=np.zeros(n, np.int64),
+        burn_heat=np.zeros(n, np.int64),
+        flame=np.zeros(n, np.uint16),
+        flame_chance=np.zeros(n, np.uint32),
+        ash=np.zeros(n, np.uint16),
+        ash_chance=np.zeros(n, np.uint32),
+        extinguishes=np.zeros(n, np.uint8),
+        resistance=np.zeros(n, np.int64),
+        blast=np.zeros((n, BLAST_COLUMNS), np.int64),
     )
 
 
@@ -306,7 +449,7 @@ def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tupl
 
 def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
     """Fill the interaction matrix; the more specific of two reactions on a pair wins."""
-    # pair -> (score, mod, reaction number, (what a becomes, what b becomes, threshold))
+    # pair -> (score, mod, reaction number, (a becomes, b becomes, threshold, lowest and highest T sum, heat))
     winner: dict[tuple[int, int], tuple[int, LoadedMod, int, tuple[int, int, int]]] = {}
     reported: set[tuple[str, int, str, int]] = set()  # conflicts already named, by both reactions
     compiled: list[CompiledReaction] = []
@@ -341,20 +484,24 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[Co
                 continue
             (set_a, score_a), (set_b, score_b) = side_a, side_b
             threshold = chance_threshold(reaction.chance)
+            low = -(2**31) if reaction.min_temperature is None else 2 * temperature_units(reaction.min_temperature)
+            high = 2**31 - 1 if reaction.max_temperature is None else 2 * temperature_units(reaction.max_temperature)
+            heat = temperature_units(reaction.heat)
             for i in sorted(set_a):
                 for j in sorted(set_b):
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
-                    claim((i, j), (out_i, out_j, threshold), score_a + score_b, mod, number)
+                    claim((i, j), (out_i, out_j, threshold, low, high, heat), score_a + score_b, mod, number)
                     if i != j:  # the same contact, seen from the other cell
-                        claim((j, i), (out_j, out_i, threshold), score_a + score_b, mod, number)
+                        claim((j, i), (out_j, out_i, threshold, low, high, heat), score_a + score_b, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
                 )
             )
-    for pair, (_, _, _, (first, second, threshold)) in winner.items():
+    for pair, (_, _, _, (first, second, threshold, low, high, heat)) in winner.items():
         t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
+        t.react_tsum_min[pair], t.react_tsum_max[pair], t.react_heat[pair] = low, high, heat
     t.reactive[:] = (t.react_chance > 0).any(axis=1)
     return tuple(compiled)
 
@@ -363,19 +510,76 @@ def _hex_rgb(color: str) -> tuple[int, int, int]:
     return int(color[1:3], 16), int(color[3:5], 16), int(color[5:7], 16)
 
 
-def _palette(elements: Sequence[ElementInfo]) -> tuple[bytes, np.ndarray]:
-    """One shared 256-colour palette: each element gets ``shades`` entries."""
-    shades = max(1, min(8, 256 // len(elements)))
+#: Hot cells glow: from this temperature on, and a level brighter every GLOW_STEP degrees.
+GLOW_FROM = 525.0  # the Draper point, where hot things start to glow red
+GLOW_STEP = 300.0
+GLOW_COLOURS = ((170, 40, 10), (255, 120, 25), (255, 225, 140))  # dull red, orange, yellow-white
+GLOW_MIX = (0.45, 0.65, 0.8)  # how much of the glow colour covers the element's own
+SCORCH_DARKEN = 0.45  # a scorched cell keeps this much of its brightness
+
+
+@dataclass(frozen=True)
+class Looks:
+    """Palette indices per element: its shades, its scorched shades, and its glow levels."""
+
+    normal: np.ndarray  # uint8[n, shades]
+    scorched: np.ndarray  # uint8[n, scorched shades]
+    glow: np.ndarray  # uint8[n, len(GLOW_COLOURS)]
+    glow_from: np.ndarray  # int64[n]: temperature (TEMP_ONE units) where it starts to glow
+
+    @property
+    def shades(self) -> int:
+        return self.normal.shape[1]
+
+
+def _palette_sizes(n: int) -> tuple[int, int]:
+    """The most shades per element (at most 8), and scorched shades, that fit 256 colours."""
+    glow = len(GLOW_COLOURS)
+    for shades in range(8, 0, -1):
+        scorched = -(-shades // 2)
+        if n * shades + (n - 1) * (scorched + glow) <= 256:
+            return shades, scorched
+    return max(1, 256 // n), 0  # so many elements that only shades fit: no scorch or glow colours
+
+
+def _palette(elements: Sequence[ElementInfo]) -> tuple[bytes, Looks]:
+    """One shared 256-colour palette: each element's shades, darker scorched shades and glow levels.
+
+    The empty cell (air) gets shades only: it neither scorches nor glows.
+    """
+    n = len(elements)
+    shades, scorched = _palette_sizes(n)
     palette = np.zeros((256, 3), np.uint8)
-    lut = np.zeros((len(elements), shades), np.uint8)
+    # An element hot by nature (lava, fire) already looks hot: it glows only when hotter still.
+    glow_from = [temperature_units(max(GLOW_FROM, e.spec.temperature)) for e in elements]
+    looks = Looks(
+        np.zeros((n, shades), np.uint8),
+        np.zeros((n, max(scorched, 1)), np.uint8),
+        np.zeros((n, len(GLOW_COLOURS)), np.uint8),
+        np.array(glow_from, np.int64),
+    )
+    entry = 0
+
+    def add(rgb) -> int:
+        nonlocal entry
+        palette[entry] = np.clip(np.round(rgb), 0, 255)
+        entry += 1
+        return entry - 1
+
     for info in elements:
-        colors = [_hex_rgb(c) for c in info.spec.color]
-        levels = -(-shades // len(colors))
-        for j in range(shades):
-            rgb = np.array(colors[j % len(colors)], float)
+        colors = [np.array(_hex_rgb(c), float) for c in info.spec.color]
+
+        def shaded(j: int, count: int) -> np.ndarray:
+            levels = -(-count // len(colors))
             v = ((j // len(colors)) + 0.5) / levels  # spread across (0, 1)
-            factor = 1.0 + info.spec.shade * (2.0 * v - 1.0)
-            entry = info.index * shades + j
-            palette[entry] = np.clip(np.round(rgb * factor), 0, 255)
-            lut[info.index, j] = entry
-    return palette.tobytes(), lut
+            return colors[j % len(colors)] * (1.0 + info.spec.shade * (2.0 * v - 1.0))
+
+        looks.normal[info.index] = [add(shaded(j, shades)) for j in range(shades)]
+        if info.index == 0 or scorched == 0:
+            looks.scorched[info.index] = looks.normal[info.index, 0]
+            looks.glow[info.index] = looks.normal[info.index, 0]
+            continue
+        looks.scorched[info.index] = [add(shaded(j, scorched) * SCORCH_DARKEN) for j in range(scorched)]
+        base = sum(colors) / len(colors)
+        looks.glow[info.index] = [add(base * (1 - mix) + np.array(hot) * mix) for hot, mix in zip(GLOW_COLOURS, GLOW_MIX)]
+    return palette.tobytes(), looks

@@ -55,11 +55,31 @@ def kernel_cache_dir() -> Path:
 
 os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
 
+import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
 from . import hashing, traversal  # noqa: E402
-from .compiler import ARCHETYPE_CODES, SUBCELL  # noqa: E402
-from .world import LOOSE, MOVED, REACTED  # noqa: E402
+from .compiler import (  # noqa: E402
+    ARCHETYPE_CODES,
+    BLAST_COLUMNS,
+    BLAST_FLING,
+    BLAST_HEAT,
+    BLAST_LEAVES,
+    BLAST_LEAVES_CHANCE,
+    BLAST_RADIUS,
+    BLAST_SCORCH,
+    BLAST_SPEED,
+    BLAST_STRENGTH,
+    BLAST_X,
+    BLAST_Y,
+    EXPLOSIVE,
+    FLAMMABLE,
+    IGNITES,
+    SUBCELL,
+    TEMP_ONE,
+)
+from .modspec import MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: E402
+from .world import BURNING, LOOSE, MOVED, REACTED, SCORCHED  # noqa: E402
 
 _mix32 = njit(inline="always", cache=True)(hashing.mix32)
 _spawn_state = njit(inline="always", cache=True)(hashing.spawn_state)
@@ -71,6 +91,11 @@ LIQUID = ARCHETYPE_CODES["liquid"]
 PARTICLE = ARCHETYPE_CODES["particle"]
 
 DONE = MOVED | REACTED  # flag bits (defined beside world.State) of a cell finished this frame
+KEPT = LOOSE | BURNING | SCORCHED  # flag bits that travel with a cell
+FRESH = ~(BURNING | SCORCHED)  # a cell turning into another element keeps only these flag bits
+POWDER_OR_LIQUID_MAX = max(ARCHETYPE_CODES["powder"], ARCHETYPE_CODES["liquid"])
+T_LOW = int(MIN_TEMPERATURE * TEMP_ONE)
+T_HIGH = int(MAX_TEMPERATURE * TEMP_ONE)
 
 # Powder on landing: its impact_share of the landing speed becomes sideways
 # speed, and at least MIN_SLIDE; sideways speed below STOP_SPEED comes to rest.
@@ -79,6 +104,7 @@ STOP_SPEED = SUBCELL // 8
 KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
 SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
+SALT_FIRE = 0x61C88647
 
 
 @njit(inline="always", cache=True)
@@ -111,10 +137,26 @@ def _clamped(value, limit):
     return max(-limit, min(limit, value))
 
 
+@njit(inline="always", cache=True)
+def _temperature(energy, recip):
+    """A cell's temperature (TEMP_ONE units) from its heat energy and 2**32 / heat capacity."""
+    return (energy * recip) >> 32
+
+
+@njit(inline="always", cache=True)
+def _energy(temperature, cap):
+    """The heat energy of a cell at ``temperature`` (clamped to the allowed range)."""
+    return max(T_LOW, min(T_HIGH, temperature)) * cap
+
+
 @njit(cache=True)
-def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
-    """Update the cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region)."""
-    cells, shade, timer, flags, vx, vy, carry = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry
+def step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count, x0, y0, x1, y1):
+    """Update the cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
+
+    Explosions set off here are appended to ``blasts`` (``blast_count[0]`` rows
+    so far) for the caller to apply after the step.
+    """
+    cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
     height, width = cells.shape
     archetype, fall_dir, accel, max_speed = t.archetype, t.fall_dir, t.accel, t.max_speed
     friction, impact_share, knock_chance, drag_keep = t.friction, t.impact_share, t.knock_chance, t.drag_keep
@@ -122,7 +164,14 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
     life_frames, life_jitter, life_into = t.life_frames, t.life_jitter, t.life_into
     reactive, displace = t.reactive, t.displace
     react_chance, react_into_a, react_into_b = t.react_chance, t.react_into_a, t.react_into_b
+    react_tsum_min, react_tsum_max, react_heat = t.react_tsum_min, t.react_tsum_max, t.react_heat
+    heat_cap, heat_recip, temp_start, thermal = t.heat_cap, t.heat_recip, t.temp_start, t.thermal
+    hot_limit, heated_into, cold_limit, cooled_into = t.hot_limit, t.heated_into, t.cold_limit, t.cooled_into
+    ignite_limit, catch_chance, burn_frames, burn_jitter = t.ignite_limit, t.catch_chance, t.burn_frames, t.burn_jitter
+    burn_limit, burn_heat, flame, flame_chance = t.burn_limit, t.burn_heat, t.flame, t.flame_chance
+    ash, ash_chance, extinguishes, blast = t.ash, t.ash_chance, t.extinguishes, t.blast
     knock_key = _mix32(move_key ^ SALT_KNOCK)
+    fire_key = _mix32(move_key ^ SALT_FIRE)
 
     for y in range(y1 - 1, y0 - 1, -1):
         forward = ((frame + y) & 1) == 0
@@ -132,20 +181,98 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
             if e == 0 or (flags[y, x] & DONE) != 0:
                 continue
 
-            # 1. Lifetime: count down, and at zero become another element.
-            if life_frames[e] != 0:
+            # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
+            f = flags[y, x]
+            th = thermal[e]
+            if th != 0 or (f & BURNING) != 0:
+                energy = int(heat[y, x])
+                into = e
+                if energy > hot_limit[e]:
+                    into = heated_into[e]
+                elif energy < cold_limit[e]:
+                    into = cooled_into[e]
+                elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
+                    f |= BURNING
+                    timer[y, x] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
+                fh = _cell_key(fire_key ^ 0x5BD1E995, x, y)
+                if into == e and (f & BURNING) != 0:
+                    if (th & EXPLOSIVE) != 0 and blast_count[0] < blasts.shape[0]:
+                        # It goes off: the blast is applied after the step; its cell is already gone.
+                        n = blast_count[0]
+                        for c in range(BLAST_COLUMNS):
+                            blasts[n, c] = blast[e, c]
+                        blasts[n, BLAST_X] = x
+                        blasts[n, BLAST_Y] = y
+                        blast_count[0] = n + 1
+                        into = 0
+                    else:
+                        out = False
+                        for k in range(4):
+                            nx = x + (1, 0, -1, 0)[k]
+                            ny = y + (0, 1, 0, -1)[k]
+                            if 0 <= nx < width and 0 <= ny < height and extinguishes[cells[ny, nx]] != 0:
+                                out = True
+                        if out:  # put out, and cooled to just below catching fire again
+                            f &= ~BURNING
+                            energy = min(energy, ignite_limit[e] - heat_cap[e] * TEMP_ONE)
+                        else:
+                            if energy < burn_limit[e]:
+                                energy = min(energy + burn_heat[e], burn_limit[e])
+                            left = timer[y, x]
+                            if left <= 1:  # burnt out
+                                into = ash[e] if ((fh >> 8) & 0xFFFFFF) < ash_chance[e] else 0
+                            else:
+                                timer[y, x] = left - 1
+                                d = fh & 3
+                                nx = x + (1, 0, -1, 0)[d]
+                                ny = y + (0, 1, 0, -1)[d]
+                                product = flame[e]
+                                if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[ny, nx] == 0:
+                                    if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
+                                        cells[ny, nx] = product
+                                        shade[ny, nx], timer[ny, nx] = _spawn_state(
+                                            _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
+                                        )
+                                        vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
+                                        heat[ny, nx] = _energy(temp_start[product], heat_cap[product])
+                                        flags[ny, nx] = MOVED | LOOSE
+                if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
+                    # A flame lights the flammable cells it touches, each by its own chance.
+                    for k in range(4):
+                        nx = x + (1, 0, -1, 0)[k]
+                        ny = y + (0, 1, 0, -1)[k]
+                        if nx < 0 or ny < 0 or nx >= width or ny >= height:
+                            continue
+                        n = cells[ny, nx]
+                        if (thermal[n] & FLAMMABLE) != 0 and (flags[ny, nx] & BURNING) == 0:
+                            if (_mix32(fh ^ (k + 1) * 0x9E3779B9) >> 8) < catch_chance[n]:
+                                flags[ny, nx] |= BURNING
+                                timer[ny, nx] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
+                if into != e:
+                    cells[y, x] = into
+                    shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
+                    vx[y, x] = vy[y, x] = carry[y, x] = 0
+                    heat[y, x] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
+                    flags[y, x] = (f & FRESH) | MOVED
+                    continue
+                heat[y, x] = energy
+                flags[y, x] = f
+
+            # 2. Lifetime: count down, and at zero become another element (not while burning).
+            if life_frames[e] != 0 and (f & BURNING) == 0:
                 left = timer[y, x]
                 if left <= 1:
                     into = life_into[e]
                     cells[y, x] = into
                     shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                     vx[y, x] = vy[y, x] = carry[y, x] = 0
-                    flags[y, x] |= MOVED
+                    heat[y, x] = _energy(_temperature(int(heat[y, x]), heat_recip[e]), heat_cap[into])
+                    flags[y, x] = (flags[y, x] & FRESH) | MOVED
                     continue
                 timer[y, x] = left - 1
             h = _cell_key(move_key, x, y)
 
-            # 2. Reactions: try each touching neighbour once, in a hashed order.
+            # 3. Reactions: try each touching neighbour once, in a hashed order.
             if reactive[e] != 0:
                 reacted = False
                 start = (h >> 1) & 3
@@ -163,16 +290,25 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
                     roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
                     if roll >= threshold:
                         continue
+                    ta = _temperature(int(heat[y, x]), heat_recip[e])
+                    tb = _temperature(int(heat[ny, nx]), heat_recip[b])
+                    if ta + tb < react_tsum_min[e, b] or ta + tb > react_tsum_max[e, b]:
+                        continue
                     into_a = react_into_a[e, b]
                     into_b = react_into_b[e, b]
+                    warm = react_heat[e, b]
                     if into_a != e:
                         cells[y, x] = into_a
                         shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
                         vx[y, x] = vy[y, x] = carry[y, x] = 0
+                        heat[y, x] = _energy(ta + warm, heat_cap[into_a])
+                        flags[y, x] &= FRESH
                     if into_b != b:
                         cells[ny, nx] = into_b
                         shade[ny, nx], timer[ny, nx] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
                         vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
+                        heat[ny, nx] = _energy(tb + warm, heat_cap[into_b])
+                        flags[ny, nx] &= FRESH
                     flags[y, x] |= REACTED
                     flags[ny, nx] |= REACTED
                     reacted = True
@@ -180,7 +316,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
                 if reacted:
                     continue
 
-            # 3. Movement: choose up to four moves to try in order, then walk them.
+            # 4. Movement: choose up to four moves to try in order, then walk them.
             kind = archetype[e]
             if kind == STATIC:
                 continue
@@ -324,24 +460,27 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
                 continue
 
             # Move: swap everything with the cell at the end of the walk.
+            marks = flags[y, x] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
             if px != x or py != y:
                 cells[y, x] = entered
                 cells[py, px] = e
                 shade[y, x], shade[py, px] = shade[py, px], shade[y, x]
                 timer[y, x], timer[py, px] = timer[py, px], timer[y, x]
                 carry[y, x], carry[py, px] = carry[py, px], carry[y, x]
+                heat[y, x], heat[py, px] = heat[py, px], heat[y, x]
                 vx[y, x] = vx[py, px]
                 vy[y, x] = vy[py, px]
-                flags[y, x] = MOVED | (flags[py, px] & LOOSE)
+                flags[y, x] = MOVED | (flags[py, px] & KEPT)
             vx[py, px] = cvx
             vy[py, px] = cvy
-            flags[py, px] = MOVED | loose
+            flags[py, px] = MOVED | loose | marks
 
             if kind == PARTICLE:
-                if loose != 0:  # landed: put down what it carries (or vanish)
+                if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
                     into = carry[py, px]
                     cells[py, px] = into
                     carry[py, px] = 0
+                    heat[py, px] = _energy(_temperature(int(heat[py, px]), heat_recip[e]), heat_cap[into])
                     if into == 0:
                         vx[py, px] = vy[py, px] = 0
                     elif life_frames[e] != 0:  # the particle's own clock ran: start the cargo's
@@ -370,15 +509,176 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, x0, y0, x1, y1):
 
 @njit(cache=True)
 def clear_marks(flags):
-    """Forget what moved last frame; keep which grains are loose."""
+    """Forget what moved and reacted last frame; keep what travels with the cells."""
     for y in range(flags.shape[0]):
         for x in range(flags.shape[1]):
-            flags[y, x] &= LOOSE
+            flags[y, x] &= KEPT
 
 
 @njit(cache=True)
-def step(s, t, move_key, react_key, spawn_key, frame):
-    """Advance the whole world by one frame."""
+def conduct(s, t, frame, x0, y0, x1, y1):
+    """Heat flows between touching cells of rows y0..y1-1 and columns x0..x1-1 (and
+    the row below and column right of them), and cells with ``cooling`` lose heat to the outside.
+
+    Each touching pair exchanges ``g * (T_a - T_b)`` of energy, where ``g`` is
+    the smaller of the two cells' conductance (conductivity x capacity / 4),
+    rounded towards zero. One side's temperature then moves by at most a
+    quarter of the gap, so the two never swap places and no cell overshoots:
+    the scheme is stable for any conductivities. What one cell loses the other
+    gains, so conduction alone conserves the total exactly. The sweep runs
+    forwards on even frames and backwards on odd ones, so heat has no
+    favourite direction.
+    """
+    cells, heat = s.cells, s.heat
+    height, width = cells.shape
+    heat_cap, heat_recip, conductance, cooling = t.heat_cap, t.heat_recip, t.conductance, t.cooling
+    ambient = int(t.temp_start[0])  # the air's temperature is the world's outside
+    backwards = (frame & 1) == 1
+    for j in range(y1 - y0):
+        y = y1 - 1 - j if backwards else y0 + j
+        for i in range(x1 - x0):
+            x = x1 - 1 - i if backwards else x0 + i
+            e = cells[y, x]
+            energy = int(heat[y, x])
+            if cooling[e] != 0:
+                energy += _scaled(_energy(ambient, heat_cap[e]) - energy, cooling[e])
+                heat[y, x] = energy
+            g_own = conductance[e]
+            if g_own == 0:
+                continue
+            for k in range(2):
+                nx = x + 1 - k
+                ny = y + k
+                if nx >= width or ny >= height:
+                    continue
+                n = cells[ny, nx]
+                other = int(heat[ny, nx])
+                if n == e and other == energy:
+                    continue  # the common case: the same stuff at the same temperature
+                g = min(g_own, conductance[n])
+                gap = _temperature(energy, heat_recip[e]) - _temperature(other, heat_recip[n])
+                flow = _scaled(gap * g, 1)
+                if flow != 0:
+                    energy -= flow
+                    heat[y, x] = energy
+                    heat[ny, nx] = other + flow
+
+
+@njit(cache=True)
+def step(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count):
+    """Advance the whole world by one frame; explosions it sets off are queued in ``blasts``."""
     clear_marks(s.flags)
     height, width = s.cells.shape
-    step_region(s, t, move_key, react_key, spawn_key, frame, 0, 0, width, height)
+    conduct(s, t, frame, 0, 0, width, height)
+    step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count, 0, 0, width, height)
+
+
+@njit(cache=True)
+def explode(s, t, blasts, count, key, particle):
+    """Set off the first ``count`` explosions of ``blasts``, one after another.
+
+    Each blast sends a ray from its centre to every cell on the border of the
+    square of side 2 x radius around it (these rays cover every cell of the
+    disc). A ray starts with the blast's strength; each cell within the radius
+    that resists no more than the ray has left is destroyed and costs the ray
+    its resistance per cell of length, so the hole in uniform ground is round.
+    A cell that resists more stops the destruction there. The ray then marks a
+    fringe of ``scorch`` cells, and stops behind a cell no blast of this
+    strength could break. Rays only read the world, so a cell that several rays
+    reach is destroyed or scorched once, whatever the order of the rays.
+    Destroyed powder and liquid cells may fly off as particles; scorched cells
+    darken, with a chance that falls off across the fringe.
+    """
+    cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
+    height, width = cells.shape
+    archetype, resistance, heat_cap, heat_recip = t.archetype, t.resistance, t.heat_cap, t.heat_recip
+    life_frames, life_jitter = t.life_frames, t.life_jitter
+    for b in range(count):
+        cx, cy = blasts[b, BLAST_X], blasts[b, BLAST_Y]
+        radius, strength, scorch = blasts[b, BLAST_RADIUS], blasts[b, BLAST_STRENGTH], blasts[b, BLAST_SCORCH]
+        reach = radius + scorch
+        # 0: untouched; 1: destroyed; 2 + d: fringe cell d cells past the destruction (the nearest ray's d).
+        mark = np.zeros((2 * reach + 1, 2 * reach + 1), np.int16)
+        if 0 <= cx < width and 0 <= cy < height:
+            mark[reach, reach] = 1
+        for r in range(8 * radius):
+            side = r // (2 * radius)
+            o = r % (2 * radius)
+            if side == 0:
+                bx, by = o - radius, -radius
+            elif side == 1:
+                bx, by = radius, o - radius
+            elif side == 2:
+                bx, by = radius - o, radius
+            else:
+                bx, by = -radius, radius - o
+            minor = min(abs(bx), abs(by))
+            step_len = int(np.floor(256.0 * np.sqrt(float(radius * radius + minor * minor)) / radius + 0.5))
+            left = strength
+            destroying = True
+            past = 0
+            for k in range(1, reach + 1):
+                qx, qy = _line_point(cx, cy, bx, by, radius, k)
+                if qx < 0 or qy < 0 or qx >= width or qy >= height:
+                    break
+                ox = qx - cx
+                oy = qy - cy
+                c = cells[qy, qx]
+                if destroying:
+                    if ox * ox + oy * oy <= radius * radius and resistance[c] <= left:
+                        left -= (resistance[c] * step_len) >> 8
+                        mark[oy + reach, ox + reach] = 1
+                        continue
+                    destroying = False
+                if past >= scorch:
+                    break
+                m = mark[oy + reach, ox + reach]
+                if c != 0 and m != 1 and (m == 0 or m > 2 + past):
+                    mark[oy + reach, ox + reach] = 2 + past
+                past += 1
+                if resistance[c] > strength:
+                    break  # an unbreakable wall: nothing behind it is touched
+
+        leaves, leaves_chance, fling = blasts[b, BLAST_LEAVES], blasts[b, BLAST_LEAVES_CHANCE], blasts[b, BLAST_FLING]
+        speed, hot = blasts[b, BLAST_SPEED], blasts[b, BLAST_HEAT]
+        blast_key = _mix32(key ^ (b * 0x9E3779B9))
+        for my in range(2 * reach + 1):
+            for mx in range(2 * reach + 1):
+                m = mark[my, mx]
+                if m == 0:
+                    continue
+                ox = mx - reach
+                oy = my - reach
+                qx = cx + ox
+                qy = cy + oy
+                c = cells[qy, qx]
+                h = _cell_key(blast_key, qx, qy)
+                roll = h >> 8
+                warmth = max(_temperature(int(heat[qy, qx]), heat_recip[c]), hot)
+                if m == 1:
+                    kind = archetype[c]
+                    if (kind == POWDER or kind == LIQUID) and roll < fling:
+                        # It flies off, away from the centre, fastest near it.
+                        dist = np.sqrt(float(ox * ox + oy * oy))
+                        if dist == 0.0:
+                            angle = (h & 255) * (2.0 * np.pi / 256.0)
+                            dx, dy = np.cos(angle), np.sin(angle)
+                        else:
+                            dx, dy = ox / dist, oy / dist
+                        v = speed * (1.0 - dist / (radius + 1.0)) * (0.6 + 0.4 * ((h & 255) / 256.0))
+                        cells[qy, qx] = particle
+                        carry[qy, qx] = c
+                        vx[qy, qx] = int(np.floor(dx * v + 0.5))
+                        vy[qy, qx] = int(np.floor(dy * v + 0.5))
+                        flags[qy, qx] = 0
+                        heat[qy, qx] = _energy(warmth, heat_cap[particle])
+                    else:
+                        into = leaves if (_mix32(h) >> 8) < leaves_chance else 0
+                        cells[qy, qx] = into
+                        shade[qy, qx], timer[qy, qx] = _spawn_state(h, life_frames[into], life_jitter[into])
+                        vx[qy, qx] = vy[qy, qx] = carry[qy, qx] = 0
+                        flags[qy, qx] = LOOSE
+                        heat[qy, qx] = _energy(warmth, heat_cap[into])
+                elif roll % (scorch + 1) < scorch - (m - 2):  # scorched: chance (scorch - d) / (scorch + 1)
+                    flags[qy, qx] |= SCORCHED
+                    heat[qy, qx] = _energy(warmth, heat_cap[c])

@@ -53,6 +53,11 @@ PARTICLE_ID = "base:particle"
 #: Fastest any cell may move, in cells per frame. Bounded so that chunks updated
 #: in parallel never reach into each other's cells.
 MAX_SPEED = 16
+#: Temperatures are in degrees Celsius, within these bounds.
+MIN_TEMPERATURE = -273.0
+MAX_TEMPERATURE = 9999.0
+#: Largest explosion radius, in cells.
+MAX_BLAST_RADIUS = 32
 
 
 def _as_list(value: object) -> object:
@@ -87,6 +92,71 @@ class Lifetime(_Strict):
     becomes: ElementName = Field(description="The element a cell turns into when its time is up.")
 
 
+Temperature = Annotated[float, Field(ge=MIN_TEMPERATURE, le=MAX_TEMPERATURE)]
+
+
+class Heated(_Strict):
+    """Hotter than ``above`` degrees, the element turns into another, keeping its temperature."""
+
+    above: Temperature = Field(description="Degrees Celsius; hotter than this, it changes.")
+    becomes: ElementName = Field(description="The element it turns into (water: 'steam').")
+
+
+class Cooled(_Strict):
+    """Colder than ``below`` degrees, the element turns into another, keeping its temperature."""
+
+    below: Temperature = Field(description="Degrees Celsius; colder than this, it changes.")
+    becomes: ElementName = Field(description="The element it turns into (lava: 'stone').")
+
+
+class Flammable(_Strict):
+    """How an element catches fire and burns (or, with an ``explosion``, blows up)."""
+
+    ignites_at: Temperature = Field(description="It catches fire at or above this temperature, in degrees Celsius.")
+    catch_chance: float = Field(
+        0.05, ge=0.0, le=1.0, description="Chance per frame that a touching flame (fire, lava, a burning cell) lights it."
+    )
+    burn_time: int = Field(120, ge=1, le=60000, description="Frames it burns before it is used up.")
+    burn_jitter: int = Field(0, ge=0, le=5000, description="Up to this many extra frames of burning, chosen per cell.")
+    burn_temperature: Temperature = Field(
+        700.0, description="While burning it heats itself by 'heat' degrees a frame up to this temperature."
+    )
+    heat: float = Field(20.0, ge=0.0, le=1000.0, description="Degrees a burning cell gains each frame (up to burn_temperature).")
+    flame: ElementName | None = Field(
+        None, description="What a burning cell gives off into the empty cells it touches, e.g. 'fire'."
+    )
+    flame_chance: float = Field(0.2, ge=0.0, le=1.0, description="Chance per frame of giving off a flame into an empty neighbour.")
+    leaves: ElementName = Field(EMPTY_ID, description="What a burnt-out cell becomes, e.g. 'ash' (default: nothing).")
+    leaves_chance: float = Field(1.0, ge=0.0, le=1.0, description="Chance that a burnt-out cell leaves that (else nothing).")
+
+    @model_validator(mode="after")
+    def _heats_to_burn(self) -> "Flammable":
+        if self.burn_temperature < self.ignites_at:
+            raise ValueError("burn_temperature must be at least ignites_at, or the fire would go out at once")
+        return self
+
+
+class Explosion(_Strict):
+    """A blast: rays from the centre destroy what they can afford to, out to ``radius``.
+
+    Each ray starts with ``strength`` and pays every cell's
+    ``explosion_resistance`` (per cell of length) to destroy it; a cell that
+    resists more than the ray has left stops the ray. Past the destruction a
+    fringe of ``scorch`` cells is darkened, less and less often.
+    """
+
+    radius: int = Field(ge=1, le=MAX_BLAST_RADIUS, description=f"Reach in cells (1 to {MAX_BLAST_RADIUS}).")
+    strength: float = Field(gt=0.0, le=100000.0, description="What a ray can spend on destroying cells (stone resists 2 a cell).")
+    leaves: ElementName = Field(EMPTY_ID, description="What destroyed cells become, e.g. 'fire' for a flash (default: nothing).")
+    leaves_chance: float = Field(1.0, ge=0.0, le=1.0, description="Chance that a destroyed cell becomes 'leaves' (else nothing).")
+    fling: float = Field(0.5, ge=0.0, le=1.0, description="Share of destroyed powder and liquid cells that fly off as particles.")
+    speed: float = Field(6.0, gt=0.0, le=MAX_SPEED, description="Speed of flung cells, in cells per frame, at the centre.")
+    heat: Temperature | None = Field(
+        None, description="Destroyed and scorched cells are heated to at least this temperature (may light what is near)."
+    )
+    scorch: int = Field(3, ge=0, le=MAX_BLAST_RADIUS, description="Width in cells of the darkened fringe past the destruction.")
+
+
 class _ElementBase(_Strict):
     description: str = Field("", max_length=2000, description="What the element is, for 'sandmod list'.")
     color: Annotated[list[HexColor], BeforeValidator(_as_list)] = Field(
@@ -105,6 +175,39 @@ class _ElementBase(_Strict):
         False,
         description="Set to replace an element another mod defines (the key is then 'mod:element').",
     )
+    temperature: Temperature = Field(20.0, description="Temperature of a newly placed cell, in degrees Celsius.")
+    heat_capacity: float = Field(
+        1.0, ge=0.05, le=10.0, description="Heat it takes to warm a cell by one degree, relative to stone (water 4)."
+    )
+    conductivity: float = Field(
+        0.2, ge=0.0, le=1.0, description="How fast heat passes through it: 0 insulates, 1 evens out fastest."
+    )
+    cooling: float = Field(
+        0.0, ge=0.0, le=0.5, description="Share of its difference from the air's temperature lost each frame (heat leaving the world)."
+    )
+    heated: Heated | None = Field(None, description="What it becomes above a temperature (water boils to steam).")
+    cooled: Cooled | None = Field(None, description="What it becomes below a temperature (lava cools to stone).")
+    flammable: Flammable | None = Field(None, description="How it catches fire and burns.")
+    explosion: Explosion | None = Field(
+        None, description="It explodes instead of burning when lit or hot (needs 'flammable' to say when)."
+    )
+    explosion_resistance: float | None = Field(
+        None,
+        ge=0.0,
+        le=1e6,
+        description="What a blast ray must spend to destroy a cell; more than the ray has left stops it. "
+        "Default: 0 for empty, gases and particles, 0.5 for powders and liquids, 2 for static solids.",
+    )
+    ignites: bool = Field(False, description="It lights flammable cells it touches (fire, lava).")
+    extinguishes: bool = Field(False, description="It puts out burning cells it touches (water).")
+
+    @model_validator(mode="after")
+    def _consistent_heat(self):
+        if self.heated is not None and self.cooled is not None and self.cooled.below >= self.heated.above:
+            raise ValueError("cooled.below must be colder than heated.above")
+        if self.explosion is not None and self.flammable is None:
+            raise ValueError("an explosive element needs 'flammable' (ignites_at, catch_chance) to say when it goes off")
+        return self
 
     @field_validator("color")
     @classmethod
@@ -257,11 +360,25 @@ class Reaction(_Strict):
     a_becomes: ElementName | None = Field(None, description="What the first cell becomes (unchanged if left out).")
     b_becomes: ElementName | None = Field(None, description="What the second cell becomes (unchanged if left out).")
     chance: float = Field(gt=0.0, le=1.0, description="Chance per frame that a touching pair reacts.")
+    min_temperature: Temperature | None = Field(
+        None, description="It happens only when the pair's mean temperature is at least this (degrees Celsius)."
+    )
+    max_temperature: Temperature | None = Field(
+        None, description="It happens only when the pair's mean temperature is at most this (degrees Celsius)."
+    )
+    heat: float = Field(
+        0.0,
+        ge=-10000.0,
+        le=10000.0,
+        description="Degrees added to each cell that changes: positive releases heat, negative absorbs it.",
+    )
 
     @model_validator(mode="after")
     def _changes_something(self) -> "Reaction":
         if self.a_becomes is None and self.b_becomes is None:
             raise ValueError("a reaction needs a_becomes, b_becomes or both")
+        if self.min_temperature is not None and self.max_temperature is not None and self.min_temperature > self.max_temperature:
+            raise ValueError("min_temperature must not be above max_temperature")
         return self
 
 

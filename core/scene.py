@@ -50,6 +50,8 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
         placed = place("scene", number, shape)
         if placed is not None:
             world.paint(placed[1], placed[0])
+            if shape.temperature is not None:
+                world.set_temperature(placed[1], shape.temperature)
     for number, emitter in enumerate(spec.emitters):
         placed = place("emitters", number, emitter)
         if placed is not None:
@@ -65,6 +67,17 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
             world.sprays.append(
                 Spray(ys, xs, placed[0], spray.direction, spray.spread, tuple(spray.speed), spray.rate, spray.start, spray.stop, number)
             )
+    for number, blast in enumerate(spec.explosions):
+        x, y = blast.at
+        if not (0 <= x < info.width and 0 <= y < info.height):
+            problems.append(source.problem(("explosions", number, "at"), f"the centre lies outside the {info.width}x{info.height} world"))
+            continue
+        try:
+            ruleset.index(blast.leaves)
+        except KeyError as exc:
+            problems.append(source.problem(("explosions", number, "leaves"), exc.args[0]))
+            continue
+        world.scheduled.append((blast.frame, x, y, blast))
     if problems:
         raise ProblemsError(problems)
     return world

@@ -1,10 +1,12 @@
 """The state of a world: a few numpy arrays, painted by shapes and stepped by the kernel.
 
-Per cell (12 bytes): the element (uint16), a shade (uint8, picked at birth,
-travels with the cell), a lifetime timer (uint16), flags (uint8: moved this
-frame, reacted, loose), a velocity (two int16, in 1/256ths of a cell per frame)
-and, for flying particles, the element carried (uint16). Building and painting
-a world needs no numba; stepping it does.
+Per cell (16 bytes): the element (uint16), a shade (uint8, picked at birth,
+travels with the cell), a timer (uint16: lifetime left, or burning time left),
+flags (uint8: moved this frame, reacted, loose, burning, scorched), a velocity
+(two int16, in 1/256ths of a cell per frame), for flying particles the element
+carried (uint16), and its heat (int32: heat capacity x temperature, so that
+conduction conserves it exactly). Building and painting a world needs no
+numba; stepping it does.
 """
 
 from __future__ import annotations
@@ -15,8 +17,22 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .compiler import ARCHETYPE_CODES, SUBCELL, Ruleset, Tables
-from .modspec import MAX_SPEED
+from .compiler import (
+    ARCHETYPE_CODES,
+    BLAST_COLUMNS,
+    BLAST_X,
+    BLAST_Y,
+    GLOW_COLOURS,
+    GLOW_FROM,
+    GLOW_STEP,
+    SUBCELL,
+    TEMP_ONE,
+    Ruleset,
+    Tables,
+    blast_row,
+    temperature_units,
+)
+from .modspec import MAX_SPEED, Explosion
 from .hashing import (
     ROLL_BITS,
     SALT_MOVE,
@@ -24,6 +40,7 @@ from .hashing import (
     SALT_REACT,
     SALT_SPAWN,
     SALT_SPRAY,
+    SALT_BLAST,
     cell_hash,
     chance_threshold,
     frame_key,
@@ -31,10 +48,15 @@ from .hashing import (
     spawn_state,
 )
 
-# Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame.
+# Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame;
+# the others travel with the cell and are dropped when it turns into another element.
 MOVED = 1  # moved or changed this frame
 REACTED = 2  # reacted this frame
 LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
+BURNING = 8  # on fire: the timer counts down the burning time
+SCORCHED = 16  # darkened by a blast
+#: Explosions one frame may queue; a cell that finds the queue full goes off next frame.
+BLAST_QUEUE = 4096
 
 
 def _on(start: int, stop: int | None, frame: int) -> bool:
@@ -52,6 +74,7 @@ class State(NamedTuple):
     vx: np.ndarray  # int16: velocity, 1/256ths of a cell per frame, right positive
     vy: np.ndarray  # int16: velocity, down positive
     carry: np.ndarray  # uint16: what a flying particle carries (0 elsewhere)
+    heat: np.ndarray  # int32: heat energy, heat_cap x temperature (fixed point, see compiler)
 
 
 @dataclass(frozen=True)
@@ -123,9 +146,13 @@ class World:
             vx=np.zeros(shape, np.int16),
             vy=np.zeros(shape, np.int16),
             carry=np.zeros(shape, np.uint16),
+            heat=np.zeros(shape, np.int32),
         )
+        self.blasts = np.zeros((BLAST_QUEUE, BLAST_COLUMNS), np.int64)  # explosions queued during a step
+        self.blast_count = np.zeros(1, np.int64)
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
+        self.scheduled: list[tuple[int, int, int, Explosion]] = []  # (frame, x, y, explosion)
         self.paint(np.ones((height, width), bool), 0)  # empty, with its own shades
 
     @property
@@ -159,6 +186,7 @@ class World:
         s.timer[ys, xs] = timer
         s.flags[ys, xs] = LOOSE
         s.vx[ys, xs] = s.vy[ys, xs] = s.carry[ys, xs] = 0
+        s.heat[ys, xs] = t.heat_cap[element] * t.temp_start[element]
         return len(xs)
 
     def launch(self, ys: np.ndarray, xs: np.ndarray, vx: np.ndarray, vy: np.ndarray) -> int:
@@ -171,9 +199,11 @@ class World:
         vx, vy = np.broadcast_to(vx, ys.shape), np.broadcast_to(vy, ys.shape)
         keep = (s.cells[ys, xs] != 0) & (self.tables.archetype[s.cells[ys, xs]] != ARCHETYPE_CODES["particle"])
         ys, xs, vx, vy = ys[keep], xs[keep], vx[keep], vy[keep]
+        celsius = self.temperature()[ys, xs]
         s.carry[ys, xs] = s.cells[ys, xs]
         s.cells[ys, xs] = self.ruleset.particle
         self._set_velocity(ys, xs, vx, vy)
+        self._set_temperature(ys, xs, celsius)
         return len(xs)
 
     def spawn_particles(self, ys: np.ndarray, xs: np.ndarray, element: int, vx: np.ndarray, vy: np.ndarray) -> int:
@@ -204,9 +234,42 @@ class World:
         s.vy[ys, xs] = np.clip(np.round(np.asarray(vy, float) * SUBCELL), -limit, limit)
         s.flags[ys, xs] = 0
 
+    def temperature(self) -> np.ndarray:
+        """Every cell's temperature in degrees Celsius (float), (height, width)."""
+        return self._temperature_units() / TEMP_ONE
+
+    def _temperature_units(self) -> np.ndarray:
+        s, t = self.state, self.tables
+        return (s.heat.astype(np.int64) * t.heat_recip[s.cells]) >> 32
+
+    def set_temperature(self, mask: np.ndarray, celsius: float) -> None:
+        """Heat or cool the cells of ``mask`` to ``celsius`` degrees."""
+        ys, xs = np.nonzero(mask)
+        self._set_temperature(ys, xs, celsius)
+
+    def _set_temperature(self, ys, xs, celsius) -> None:
+        s = self.state
+        units = np.round(np.asarray(celsius, float) * TEMP_ONE).astype(np.int64)
+        s.heat[ys, xs] = self.tables.heat_cap[s.cells[ys, xs]] * units
+
+    def heat_total(self) -> int:
+        """The sum of every cell's heat energy (conduction keeps it; sources and cooling change it)."""
+        return int(self.state.heat.sum(dtype=np.int64))
+
+    def explode(self, x: int, y: int, explosion: Explosion) -> None:
+        """Set off an explosion centred on cell (x, y) now."""
+        from .kernel import explode
+
+        leaves = self.ruleset.index(explosion.leaves)
+        rows = blast_row(explosion, leaves, x, y)[None, :]
+        explode(self.state, self.tables, rows, 1, self._blast_key(1), self.ruleset.particle)
+
+    def _blast_key(self, salt: int) -> int:
+        return frame_key(self.seed, self.frame, SALT_BLAST + salt)
+
     def step(self) -> None:
-        """Advance one frame: emitters pour, sprays shoot, then the kernel updates every cell."""
-        from .kernel import step
+        """Advance one frame: emitters pour, sprays shoot, the kernel updates every cell, explosions go off."""
+        from .kernel import explode, step
 
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
@@ -224,7 +287,18 @@ class World:
             frame_key(self.seed, self.frame, SALT_REACT),
             frame_key(self.seed, self.frame, SALT_SPAWN),
             self.frame,
+            self.blasts,
+            self.blast_count,
         )
+        count = int(self.blast_count[0])
+        if count:  # in a fixed order (top to bottom, left to right), whatever order the kernel queued them
+            queued = self.blasts[:count]
+            queued[:] = queued[np.lexsort((queued[:, BLAST_X], queued[:, BLAST_Y]))]
+            explode(self.state, self.tables, queued, count, self._blast_key(0), self.ruleset.particle)
+            self.blast_count[0] = 0
+        for frame, x, y, explosion in self.scheduled:
+            if frame == self.frame:
+                self.explode(x, y, explosion)
         self.frame += 1
 
     def counts(self, *, carried: bool = False) -> dict[str, int]:
@@ -243,10 +317,25 @@ class World:
         return np.where(s.carry != 0, s.carry, s.cells)
 
     def image(self, scale: int = 1) -> np.ndarray:
-        """Palette indices of every cell, each cell a ``scale`` x ``scale`` block."""
-        rs = self.ruleset
-        bucket = (self.state.shade.astype(np.uint16) * rs.shades) >> 8
-        frame = rs.color_lut[self.shown(), bucket]
+        """Palette indices of every cell, each cell a ``scale`` x ``scale`` block.
+
+        A cell shows its element's colour in its own shade; scorched cells are
+        darker, and cells hotter than the glow point glow red, orange, then yellow.
+        """
+        looks, s = self.ruleset.looks, self.state
+        shown = self.shown()
+        shade = s.shade.astype(np.uint16)
+        frame = looks.normal[shown, (shade * looks.shades) >> 8]
+        scorched = (s.flags & SCORCHED) != 0
+        if scorched.any():
+            frame[scorched] = looks.scorched[shown[scorched], (shade[scorched] * looks.scorched.shape[1]) >> 8]
+        if int(s.heat.max()) >= temperature_units(GLOW_FROM):  # cheap test first: heat >= temperature
+            units = self._temperature_units()
+            start = looks.glow_from[shown]
+            hot = (units >= start) & (shown != 0)
+            if hot.any():
+                level = np.minimum((units[hot] - start[hot]) // temperature_units(GLOW_STEP), len(GLOW_COLOURS) - 1)
+                frame[hot] = looks.glow[shown[hot], level]
         if scale > 1:
             frame = np.repeat(np.repeat(frame, scale, axis=0), scale, axis=1)
         return frame

@@ -27,6 +27,12 @@
     stop = 200
     chance = 0.5
 
+    [[explosions]]                 # a blast at a frame and place
+    frame = 120
+    at = [80, 100]
+    radius = 10
+    strength = 20
+
     [[sprays]]                     # shoots particles that land as their element
     element = "water"
     at = [20, 100]
@@ -51,7 +57,7 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
-from .modspec import ELEMENT_REF, MAX_SPEED, ModName
+from .modspec import ELEMENT_REF, MAX_SPEED, Explosion, ModName, Temperature
 
 #: Largest width or height (the kernel's cell hash packs x and y in 16 and 15 bits).
 MAX_SIZE = 16384
@@ -86,6 +92,9 @@ class WorldInfo(_Strict):
 
 class _Shape(_Strict):
     element: ElementRef = Field(description="The element to paint ('empty' erases).")
+    temperature: Temperature | None = Field(
+        None, description="Degrees Celsius of the painted cells (default: the element's own)."
+    )
 
 
 class Rect(_Shape):
@@ -193,6 +202,14 @@ class Spray(_Timed):
         return speed
 
 
+class ScheduledExplosion(Explosion):
+    """An explosion the world sets off at a frame and place (after that frame's step)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    frame: int = Field(ge=0, description="The frame it goes off on.")
+    at: Point = Field(description="Its centre, [x, y].")
+
+
 class RenderSettings(_Strict):
     """The ``[render]`` table (the command line may override each)."""
 
@@ -212,4 +229,5 @@ class WorldFile(_Strict):
     scene: list[Shape] = Field(default_factory=list, description="Shapes painted in order before the first frame.")
     emitters: list[Emitter] = Field(default_factory=list, description="Shapes that pour an element over frames.")
     sprays: list[Spray] = Field(default_factory=list, description="Sources of flying particles.")
+    explosions: list[ScheduledExplosion] = Field(default_factory=list, description="Blasts at given frames and places.")
     render: RenderSettings = Field(default_factory=RenderSettings, description="How 'sandmod render' records.")

@@ -21,6 +21,15 @@ LEGEND = {
     "A": "acid",
     "T": "titanium",
     "G": "steam",
+    "I": "ice",
+    "w": "wood",
+    "O": "oil",
+    "P": "gunpowder",
+    "X": "tnt",
+    "F": "fire",
+    "K": "smoke",
+    "g": "glass",
+    "a": "ash",
 }
 
 

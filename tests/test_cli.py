@@ -156,7 +156,7 @@ def test_list_shows_elements_and_reactions():
     lines = result.stdout.splitlines()
     assert lines[0].split() == ["ELEMENT", "ARCHETYPE", "DENSITY", "TAGS", "DESCRIPTION"]
     assert any(line.startswith("sand:sand") and "powder" in line for line in lines)
-    assert any(line.startswith("lava + water") and "stone + steam" in line for line in lines)
+    assert any(line.startswith("fire + water") and "steam + (same)" in line for line in lines)
 
 
 def test_list_json():
@@ -172,14 +172,14 @@ def test_list_json():
         "description": "",
         "plugin": "sandmod.plugins.toml_mods",
     }
-    assert {"mod": "lava", "a": "lava", "b": "water", "a_becomes": "stone", "b_becomes": "steam", "chance": 0.3} in data["reactions"]
+    assert {"mod": "fire", "a": "fire", "b": "water", "a_becomes": "steam", "b_becomes": None, "chance": 0.8} in data["reactions"]
     assert [m["name"] for m in data["mods"]][0] == "base"
 
 
 def test_validate_accepts_good_files_and_reports_every_bad_one():
     result = invoke("validate", str(EXAMPLES / "hourglass.toml"), str(EXAMPLES / "acid_wall.toml"))
     assert result.exit_code == 0, result.output
-    assert result.stdout.startswith("ok: 9 mods") and result.stdout.rstrip().endswith("2 worlds")
+    assert result.stdout.startswith("ok: 13 mods") and result.stdout.rstrip().endswith("2 worlds")
     write_mods(
         Path("mods"),
         {

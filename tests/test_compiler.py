@@ -2,10 +2,22 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from conftest import write_mods
-from sandmod.compiler import ARCHETYPE_CODES, SUBCELL
+from sandmod.compiler import (
+    ARCHETYPE_CODES,
+    BLAST_RADIUS,
+    CAP_ONE,
+    COOLED,
+    EXPLOSIVE,
+    FLAMMABLE,
+    HEATED,
+    IGNITES,
+    SUBCELL,
+    TEMP_ONE,
+)
 from sandmod.errors import ProblemsError
 from sandmod.hashing import ROLL_ONE
 from sandmod.loading import load_ruleset
@@ -40,7 +52,25 @@ def test_tables_hold_each_elements_parameters(ruleset):
     assert ruleset.particle == i("base:particle")
     assert t.dispersion[i("water")] == 4 and t.dispersion[i("lava")] == 2
     assert t.rest_chance[i("lava")] == round(0.6 * ROLL_ONE)
-    assert t.life_frames[i("steam")] == 220 and t.life_into[i("steam")] == i("water")
+    assert t.life_frames[i("fire")] == 18 and t.life_into[i("fire")] == i("smoke")
+
+
+def test_heat_tables_are_fixed_point_and_precomputed(ruleset):
+    t, i = ruleset.tables, ruleset.index
+    water = i("water")
+    assert t.heat_cap[water] == 4 * CAP_ONE and t.temp_start[water] == 20 * TEMP_ONE
+    assert (t.heat_recip[water] * t.heat_cap[water]) >> 32 == 1  # temperature = (energy * recip) >> 32
+    assert t.hot_limit[water] == t.heat_cap[water] * 100 * TEMP_ONE and t.heated_into[water] == i("steam")
+    assert t.cold_limit[water] == 0 and t.cooled_into[water] == i("ice")
+    assert t.thermal[water] == HEATED | COOLED and t.extinguishes[water] == 1
+    assert t.thermal[i("lava")] == COOLED | IGNITES
+    assert t.thermal[i("wood")] == FLAMMABLE and t.ash[i("wood")] == i("ash") and t.flame[i("wood")] == i("fire")
+    assert t.thermal[i("gunpowder")] == FLAMMABLE | EXPLOSIVE and t.blast[i("gunpowder"), BLAST_RADIUS] == 5
+    assert t.blast[i("wood"), BLAST_RADIUS] == 0
+    # Conductance is conductivity x capacity / 4, in 1/256ths: each side moves at most 1/4 of a gap.
+    assert t.conductance[water] == round(0.1 * 4 * CAP_ONE * 64)
+    assert t.resistance[i("titanium")] == 1_000_000 * 256 and t.resistance[i("stone")] == 2 * 256
+    assert t.resistance[i("sand")] == 128 and t.resistance[i("empty")] == 0
 
 
 def test_density_decides_who_displaces_whom(ruleset):
@@ -54,10 +84,38 @@ def test_density_decides_who_displaces_whom(ruleset):
 
 def test_reactions_fill_the_matrix_both_ways(ruleset):
     t, i = ruleset.tables, ruleset.index
-    lava, water = i("lava"), i("water")
-    assert t.react_chance[lava, water] == t.react_chance[water, lava] == round(0.3 * ROLL_ONE)
-    assert (t.react_into_a[lava, water], t.react_into_b[lava, water]) == (i("stone"), i("steam"))
-    assert (t.react_into_a[water, lava], t.react_into_b[water, lava]) == (i("steam"), i("stone"))
+    fire, water = i("fire"), i("water")
+    assert t.react_chance[fire, water] == t.react_chance[water, fire] == round(0.8 * ROLL_ONE)
+    assert (t.react_into_a[fire, water], t.react_into_b[fire, water]) == (i("steam"), water)
+    assert (t.react_into_a[water, fire], t.react_into_b[water, fire]) == (water, i("steam"))
+
+
+def test_reaction_temperatures_and_heat_fill_the_matrix(registry, tmp_path):
+    mods = write_mods(
+        tmp_path / "mods",
+        {
+            "r.toml": """
+            [mod]
+            name = "r"
+            [elements.a]
+            archetype = "static"
+            color = "#ffffff"
+            [[reactions]]
+            a = "a"
+            b = "stone"
+            a_becomes = "empty"
+            chance = 1
+            min_temperature = 100
+            max_temperature = 200.5
+            heat = -30
+            """
+        },
+    )
+    rs = load_ruleset(["r"], [mods], registry=registry)
+    t, a, stone = rs.tables, rs.index("a"), rs.index("stone")
+    for pair in ((a, stone), (stone, a)):
+        assert (t.react_tsum_min[pair], t.react_tsum_max[pair]) == (200 * TEMP_ONE, 401 * TEMP_ONE)  # of T_a + T_b
+        assert t.react_heat[pair] == -30 * TEMP_ONE
 
 
 def test_tag_selectors_spare_acid_proof_elements(ruleset):
@@ -251,17 +309,29 @@ def test_missing_required_mod_cycles_and_duplicate_names(registry, tmp_path):
 def test_load_order_puts_dependencies_first(registry):
     ruleset = load_ruleset(["lava"], registry=registry)
     names = [m.name for m in ruleset.mods]
-    assert names == ["base", "water", "steam", "lava"]
+    assert names == ["base", "lava"]
+    names = [m.name for m in load_ruleset(["wood"], registry=registry).mods]
+    assert names == ["base", "water", "fire", "wood"]
+
+
+def test_bare_names_prefer_the_mods_a_mod_requires(registry, tmp_path):
+    # The user's own 'glass' does not make the sand mod's 'glass' ambiguous: sand requires the glass mod.
+    mods = write_mods(tmp_path / "mods", {"mine.toml": '[mod]\nname = "mine"\n[elements.glass]\narchetype = "static"\ncolor = "#000000"\n'})
+    rs = load_ruleset(["sand", "mine"], [mods], registry=registry)
+    assert rs.tables.heated_into[rs.index("sand")] == rs.index("glass:glass")
 
 
 def test_palette_gives_each_element_its_shades(ruleset):
     assert len(ruleset.palette) == 768
-    shades = ruleset.shades
-    assert ruleset.color_lut.shape == (len(ruleset.elements), shades)
-    assert len(set(ruleset.color_lut.ravel().tolist())) == len(ruleset.elements) * shades
+    looks, n = ruleset.looks, len(ruleset.elements)
+    assert looks.normal.shape == (n, ruleset.shades) and ruleset.shades >= 4
+    used = np.concatenate([looks.normal.ravel(), looks.scorched[1:].ravel(), looks.glow[1:].ravel()])
+    assert len(set(used.tolist())) == len(used) <= 256  # every shade, scorch and glow colour its own entry
     stone = ruleset.index("stone")
-    colours = {tuple(ruleset.palette[3 * k : 3 * k + 3]) for k in ruleset.color_lut[stone]}
-    assert all(abs(r - 0x6B) < 40 for r, g, b in colours)
+    rgb = np.frombuffer(ruleset.palette, np.uint8).reshape(256, 3).astype(int)
+    assert all(abs(rgb[k, 0] - 0x6B) < 40 for k in looks.normal[stone])
+    assert rgb[looks.scorched[stone]].sum(axis=1).max() < rgb[looks.normal[stone]].sum(axis=1).min()  # darker
+    assert all(r > g > b for r, g, b in rgb[looks.glow[stone]])  # glowing: red over green over blue
 
 
 def test_empty_must_stay_empty(registry, tmp_path):

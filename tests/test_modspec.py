@@ -25,7 +25,7 @@ HEAD = '[mod]\nname = "m"\n\n'
 
 def test_every_bundled_mod_is_valid():
     files = sorted(bundled_mods_dir().glob("*.toml"))
-    assert {f.stem for f in files} >= {"base", "sand", "water", "lava", "acid", "titanium", "steam"}
+    assert {f.stem for f in files} >= {"base", "sand", "water", "lava", "acid", "titanium", "fire", "wood", "explosives"}
     for path in files:
         validate(ModFile, TomlSource.read(path))
 
@@ -50,7 +50,9 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.lava]\narchetype = "liquid"\ncolor = "#ff0000"\ndensity = 5\ndispersion = 1\nglow = true\n',
             "m.toml:9: elements.lava.glow: unknown field; allowed here: description, color, shade, tags, "
-            "lifetime, override, archetype, density, dispersion, viscosity, gravity, max_speed",
+            "lifetime, override, temperature, heat_capacity, conductivity, cooling, heated, cooled, flammable, "
+            "explosion, explosion_resistance, ignites, extinguishes, archetype, density, dispersion, viscosity, "
+            "gravity, max_speed",
         ),
         (
             '[elements.rock]\narchetype = "stony"\ncolor = "#333333"\n',
@@ -65,7 +67,32 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.wall]\narchetype = "static"\ncolor = "#123456"\ndispersion = 3\n',
             "m.toml:7: elements.wall.dispersion: unknown field; allowed here: description, color, shade, tags, "
-            "lifetime, override, archetype",
+            "lifetime, override, temperature, heat_capacity, conductivity, cooling, heated, cooled, flammable, "
+            "explosion, explosion_resistance, ignites, extinguishes, archetype",
+        ),
+        (
+            '[elements.x]\narchetype = "static"\ncolor = "#123456"\nheated = { above = 100 }\n',
+            "m.toml:7: elements.x.heated.becomes: required field is missing",
+        ),
+        (
+            '[elements.x]\narchetype = "static"\ncolor = "#123456"\ntemperature = -300\n',
+            "m.toml:7: elements.x.temperature: must be >= -273 (got -300)",
+        ),
+        (
+            '[elements.x]\narchetype = "static"\ncolor = "#123456"\n[elements.x.flammable]\nignites_at = 500\nburn_temperature = 300\n',
+            "m.toml:7: elements.x.flammable: burn_temperature must be at least ignites_at, or the fire would go out at once",
+        ),
+        (
+            '[elements.x]\narchetype = "static"\ncolor = "#123456"\n[elements.x.explosion]\nradius = 40\nstrength = 2\n',
+            "m.toml:8: elements.x.explosion.radius: must be <= 32 (got 40)",
+        ),
+        (
+            '[elements.x]\narchetype = "static"\ncolor = "#1234ff"\n[elements.x.explosion]\nradius = 4\nstrength = 2\n',
+            "m.toml:4: elements.x: an explosive element needs 'flammable' (ignites_at, catch_chance) to say when it goes off",
+        ),
+        (
+            '[[reactions]]\na = "x"\nb = "y"\na_becomes = "z"\nchance = 1\nmin_temperature = 50\nmax_temperature = 10\n',
+            "m.toml:4: reactions.0: min_temperature must not be above max_temperature",
         ),
         (
             '[elements.Wall]\narchetype = "static"\ncolor = "#123456"\n',

@@ -230,7 +230,7 @@ def test_launched_cells_fly_and_land_as_themselves(ruleset):
     assert world.launch(ys, xs, 3.0, -4.0) == block.sum()
     assert world.counts().get("sand:sand", 0) == 0
     shown = world.image()
-    assert (shown[block] == ruleset.color_lut[sand, (world.state.shade[block].astype(int) * ruleset.shades) >> 8]).all()
+    assert (shown[block] == ruleset.looks.normal[sand, (world.state.shade[block].astype(int) * ruleset.shades) >> 8]).all()
     for _ in range(150):
         world.step()
         assert world.counts(carried=True)["sand:sand"] == block.sum()
