@@ -139,8 +139,11 @@ def _clamped(value, limit):
 
 @njit(inline="always", cache=True)
 def _temperature(energy, recip):
-    """A cell's temperature (TEMP_ONE units) from its heat energy and 2**32 / heat capacity."""
-    return (energy * recip) >> 32
+    """A cell's temperature (TEMP_ONE units) from its heat energy and 2**32 / heat capacity.
+
+    Exact for energies that are whole multiples of the capacity, below zero too.
+    """
+    return (energy * recip) >> 32 if energy >= 0 else -((-energy * recip) >> 32)
 
 
 @njit(inline="always", cache=True)

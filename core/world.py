@@ -240,7 +240,9 @@ class World:
 
     def _temperature_units(self) -> np.ndarray:
         s, t = self.state, self.tables
-        return (s.heat.astype(np.int64) * t.heat_recip[s.cells]) >> 32
+        energy = s.heat.astype(np.int64)
+        scaled = (np.abs(energy) * t.heat_recip[s.cells]) >> 32  # as the kernel does: exact on both sides of 0
+        return np.where(energy < 0, -scaled, scaled)
 
     def set_temperature(self, mask: np.ndarray, celsius: float) -> None:
         """Heat or cool the cells of ``mask`` to ``celsius`` degrees."""
@@ -332,7 +334,7 @@ class World:
         if int(s.heat.max()) >= temperature_units(GLOW_FROM):  # cheap test first: heat >= temperature
             units = self._temperature_units()
             start = looks.glow_from[shown]
-            hot = (units >= start) & (shown != 0)
+            hot = (units > start) & (shown != 0)
             if hot.any():
                 level = np.minimum((units[hot] - start[hot]) // temperature_units(GLOW_STEP), len(GLOW_COLOURS) - 1)
                 frame[hot] = looks.glow[shown[hot], level]
