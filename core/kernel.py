@@ -258,8 +258,10 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count
                     heat[y, x] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
                     flags[y, x] = (f & FRESH) | MOVED
                     continue
-                heat[y, x] = energy
-                flags[y, x] = f
+                if energy != heat[y, x]:
+                    heat[y, x] = energy
+                if f != flags[y, x]:
+                    flags[y, x] = f
 
             # 2. Lifetime: count down, and at zero become another element (not while burning).
             if life_frames[e] != 0 and (f & BURNING) == 0:
@@ -544,8 +546,10 @@ def conduct(s, t, frame, x0, y0, x1, y1):
             e = cells[y, x]
             energy = int(heat[y, x])
             if cooling[e] != 0:
-                energy += _scaled(_energy(ambient, heat_cap[e]) - energy, cooling[e])
-                heat[y, x] = energy
+                loss = _scaled(_energy(ambient, heat_cap[e]) - energy, cooling[e])
+                if loss != 0:
+                    energy += loss
+                    heat[y, x] = energy
             g_own = conductance[e]
             if g_own == 0:
                 continue
@@ -556,8 +560,8 @@ def conduct(s, t, frame, x0, y0, x1, y1):
                     continue
                 n = cells[ny, nx]
                 other = int(heat[ny, nx])
-                if n == e and other == energy:
-                    continue  # the common case: the same stuff at the same temperature
+                if other * heat_cap[e] == energy * heat_cap[n]:
+                    continue  # the common case: the same temperature (E_a / C_a == E_b / C_b)
                 g = min(g_own, conductance[n])
                 gap = _temperature(energy, heat_recip[e]) - _temperature(other, heat_recip[n])
                 flow = _scaled(gap * g, 1)
