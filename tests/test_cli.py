@@ -365,3 +365,29 @@ def test_a_spray_fires_particles_that_land_as_their_element():
     sand = world.counts()["sand:sand"]
     assert 12 <= sand <= 20 and "base:particle" not in world.counts()
     assert np.nonzero(world.cells == world.ruleset.index("sand"))[1].min() > 3  # they flew right, away from the nozzle
+
+
+def test_explosions_and_temperatures_in_world_files_are_checked():
+    Path("blast.toml").write_text(
+        '[world]\nwidth = 40\nheight = 30\n\n[[scene]]\nshape = "rect"\nelement = "stone"\nx = 0\ny = 0\n'
+        "width = 4\nheight = 4\ntemperature = -300\n\n"
+        "[[explosions]]\nframe = 3\nat = [5, 15]\nradius = 50\nstrength = -1\n"
+    )
+    result = invoke("render", "blast.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "blast.toml:12: scene.0.temperature: must be >= -273 (got -300)",
+        "blast.toml:17: explosions.0.radius: must be <= 32 (got 50)",
+        "blast.toml:18: explosions.0.strength: must be > 0 (got -1)",
+    ]
+    Path("blast.toml").write_text(
+        '[world]\nwidth = 40\nheight = 30\n\n[[explosions]]\nframe = 3\nat = [50, 15]\nradius = 5\nstrength = 1\n'
+        'leaves = "fyre"\n\n[[explosions]]\nframe = 3\nat = [5, 15]\nradius = 5\nstrength = 1\nleaves = "smok"\n'
+    )
+    result = invoke("render", "blast.toml")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "blast.toml:7: explosions.0.at: the centre lies outside the 40x30 world",
+        "blast.toml:17: explosions.1.leaves: unknown element 'smok' (did you mean 'smoke'?)",
+    ]
+    assert not list(Path(".").glob("blast*.gif"))
