@@ -197,7 +197,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count
                 elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
                     f |= BURNING
                     timer[y, x] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
-                fh = _cell_key(fire_key ^ 0x5BD1E995, x, y)
+                lit = into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0)
+                fh = _cell_key(fire_key ^ 0x5BD1E995, x, y) if lit else 0  # rolls for fire, only where there is fire
                 if into == e and (f & BURNING) != 0:
                     if (th & EXPLOSIVE) != 0 and blast_count[0] < blasts.shape[0]:
                         # It goes off: the blast is applied after the step; its cell is already gone.
