@@ -93,7 +93,6 @@ PARTICLE = ARCHETYPE_CODES["particle"]
 DONE = MOVED | REACTED  # flag bits (defined beside world.State) of a cell finished this frame
 KEPT = LOOSE | BURNING | SCORCHED  # flag bits that travel with a cell
 FRESH = ~(BURNING | SCORCHED)  # a cell turning into another element keeps only these flag bits
-POWDER_OR_LIQUID_MAX = max(ARCHETYPE_CODES["powder"], ARCHETYPE_CODES["liquid"])
 T_LOW = int(MIN_TEMPERATURE * TEMP_ONE)
 T_HIGH = int(MAX_TEMPERATURE * TEMP_ONE)
 

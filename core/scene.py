@@ -73,11 +73,9 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
             problems.append(source.problem(("explosions", number, "at"), f"the centre lies outside the {info.width}x{info.height} world"))
             continue
         try:
-            ruleset.index(blast.leaves)
+            world.scheduled.append((blast.frame, world.blast_row(x, y, blast)))
         except KeyError as exc:
             problems.append(source.problem(("explosions", number, "leaves"), exc.args[0]))
-            continue
-        world.scheduled.append((blast.frame, x, y, blast))
     if problems:
         raise ProblemsError(problems)
     return world

@@ -69,7 +69,7 @@ class State(NamedTuple):
 
     cells: np.ndarray  # uint16: element id
     shade: np.ndarray  # uint8: colour variation, travels with the cell
-    timer: np.ndarray  # uint16: frames of lifetime left
+    timer: np.ndarray  # uint16: frames of lifetime left, or of burning while BURNING
     flags: np.ndarray  # uint8: kernel flags
     vx: np.ndarray  # int16: velocity, 1/256ths of a cell per frame, right positive
     vy: np.ndarray  # int16: velocity, down positive
@@ -152,7 +152,7 @@ class World:
         self.blast_count = np.zeros(1, np.int64)
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
-        self.scheduled: list[tuple[int, int, int, Explosion]] = []  # (frame, x, y, explosion)
+        self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
         self.paint(np.ones((height, width), bool), 0)  # empty, with its own shades
 
     @property
@@ -199,7 +199,7 @@ class World:
         vx, vy = np.broadcast_to(vx, ys.shape), np.broadcast_to(vy, ys.shape)
         keep = (s.cells[ys, xs] != 0) & (self.tables.archetype[s.cells[ys, xs]] != ARCHETYPE_CODES["particle"])
         ys, xs, vx, vy = ys[keep], xs[keep], vx[keep], vy[keep]
-        celsius = self.temperature()[ys, xs]
+        celsius = self._temperature_units(ys, xs) / TEMP_ONE
         s.carry[ys, xs] = s.cells[ys, xs]
         s.cells[ys, xs] = self.ruleset.particle
         self._set_velocity(ys, xs, vx, vy)
@@ -238,10 +238,11 @@ class World:
         """Every cell's temperature in degrees Celsius (float), (height, width)."""
         return self._temperature_units() / TEMP_ONE
 
-    def _temperature_units(self) -> np.ndarray:
+    def _temperature_units(self, ys=slice(None), xs=slice(None)) -> np.ndarray:
+        """Temperatures in the kernel's fixed point, of every cell or of the cells given."""
         s, t = self.state, self.tables
-        energy = s.heat.astype(np.int64)
-        scaled = (np.abs(energy) * t.heat_recip[s.cells]) >> 32  # as the kernel does: exact on both sides of 0
+        energy = s.heat[ys, xs].astype(np.int64)
+        scaled = (np.abs(energy) * t.heat_recip[s.cells[ys, xs]]) >> 32  # as the kernel does: exact on both sides of 0
         return np.where(energy < 0, -scaled, scaled)
 
     def set_temperature(self, mask: np.ndarray, celsius: float) -> None:
@@ -258,20 +259,23 @@ class World:
         """The sum of every cell's heat energy (conduction keeps it; sources and cooling change it)."""
         return int(self.state.heat.sum(dtype=np.int64))
 
+    def blast_row(self, x: int, y: int, explosion: Explosion) -> np.ndarray:
+        """An explosion centred on cell (x, y), as the kernel takes it (KeyError: unknown 'leaves')."""
+        return blast_row(explosion, self.ruleset.index(explosion.leaves), x, y)
+
     def explode(self, x: int, y: int, explosion: Explosion) -> None:
         """Set off an explosion centred on cell (x, y) now."""
+        self._explode(self.blast_row(x, y, explosion)[None, :], 1)
+
+    def _explode(self, rows: np.ndarray, salt: int) -> None:
         from .kernel import explode
 
-        leaves = self.ruleset.index(explosion.leaves)
-        rows = blast_row(explosion, leaves, x, y)[None, :]
-        explode(self.state, self.tables, rows, 1, self._blast_key(1), self.ruleset.particle)
-
-    def _blast_key(self, salt: int) -> int:
-        return frame_key(self.seed, self.frame, SALT_BLAST + salt)
+        key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
+        explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle)
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the kernel updates every cell, explosions go off."""
-        from .kernel import explode, step
+        from .kernel import step
 
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
@@ -296,11 +300,11 @@ class World:
         if count:  # in a fixed order (top to bottom, left to right), whatever order the kernel queued them
             queued = self.blasts[:count]
             queued[:] = queued[np.lexsort((queued[:, BLAST_X], queued[:, BLAST_Y]))]
-            explode(self.state, self.tables, queued, count, self._blast_key(0), self.ruleset.particle)
+            self._explode(queued, 0)
             self.blast_count[0] = 0
-        for frame, x, y, explosion in self.scheduled:
-            if frame == self.frame:
-                self.explode(x, y, explosion)
+        due = [row for frame, row in self.scheduled if frame == self.frame]
+        if due:  # the world file's, in its order
+            self._explode(np.array(due), 1)
         self.frame += 1
 
     def counts(self, *, carried: bool = False) -> dict[str, int]:
