@@ -56,7 +56,7 @@ def kernel_cache_dir() -> Path:
 os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
 
 import numpy as np  # noqa: E402
-from numba import njit  # noqa: E402
+from numba import njit, prange  # noqa: E402
 
 from . import hashing, traversal  # noqa: E402
 from .compiler import (  # noqa: E402
@@ -79,7 +79,7 @@ from .compiler import (  # noqa: E402
     TEMP_ONE,
 )
 from .modspec import MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: E402
-from .world import BURNING, LOOSE, MOVED, REACTED, SCORCHED  # noqa: E402
+from .world import BURNING, CHUNK_SHIFT, DETONATING, LOOSE, MOVED, REACTED, SCORCHED, TILE, TILE_SHIFT, WAKE_MARGIN  # noqa: E402
 
 _mix32 = njit(inline="always", cache=True)(hashing.mix32)
 _spawn_state = njit(inline="always", cache=True)(hashing.spawn_state)
@@ -152,11 +152,14 @@ def _energy(temperature, cap):
 
 
 @njit(cache=True)
-def step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count, x0, y0, x1, y1):
-    """Update the cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
+def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tile, x0, y0, x1, y1):
+    """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
-    Explosions set off here are appended to ``blasts`` (``blast_count[0]`` rows
-    so far) for the caller to apply after the step.
+    A chunk's cells are updated when it is ``awake`` (from last frame) or
+    ``woken`` (by a change nearby earlier this frame). Every change, and every
+    chance that did not come up, wakes the chunks within two cells of where it
+    happened in ``woken``. Explosives that go off are marked DETONATING and
+    counted in ``detonations[tile]``, for :func:`take_detonations` after the step.
     """
     cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
     height, width = cells.shape
@@ -171,359 +174,393 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count
     hot_limit, heated_into, cold_limit, cooled_into = t.hot_limit, t.heated_into, t.cold_limit, t.cooled_into
     ignite_limit, catch_chance, burn_frames, burn_jitter = t.ignite_limit, t.catch_chance, t.burn_frames, t.burn_jitter
     burn_limit, burn_heat, flame, flame_chance = t.burn_limit, t.burn_heat, t.flame, t.flame_chance
-    ash, ash_chance, extinguishes, blast = t.ash, t.ash_chance, t.extinguishes, t.blast
+    ash, ash_chance, extinguishes = t.ash, t.ash_chance, t.extinguishes
     knock_key = _mix32(move_key ^ SALT_KNOCK)
     fire_key = _mix32(move_key ^ SALT_FIRE)
+    last_cx, last_cy = (width - 1) >> CHUNK_SHIFT, (height - 1) >> CHUNK_SHIFT
+    first_cx = x0 >> CHUNK_SHIFT
+    segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
 
     for y in range(y1 - 1, y0 - 1, -1):
+        cy = y >> CHUNK_SHIFT
         forward = ((frame + y) & 1) == 0
-        for i in range(x1 - x0):
-            x = x0 + i if forward else x1 - 1 - i
-            e = cells[y, x]
-            if e == 0 or (flags[y, x] & DONE) != 0:
-                continue
-
-            # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
-            f = flags[y, x]
-            th = thermal[e]
-            if th != 0 or (f & BURNING) != 0:
-                energy = int(heat[y, x])
-                into = e
-                if energy > hot_limit[e]:
-                    into = heated_into[e]
-                elif energy < cold_limit[e]:
-                    into = cooled_into[e]
-                elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
-                    f |= BURNING
-                    timer[y, x] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
-                lit = into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0)
-                fh = _cell_key(fire_key ^ 0x5BD1E995, x, y) if lit else 0  # rolls for fire, only where there is fire
-                if into == e and (f & BURNING) != 0:
-                    if (th & EXPLOSIVE) != 0 and blast_count[0] < blasts.shape[0]:
-                        # It goes off: the blast is applied after the step; its cell is already gone.
-                        n = blast_count[0]
-                        for c in range(BLAST_COLUMNS):
-                            blasts[n, c] = blast[e, c]
-                        blasts[n, BLAST_X] = x
-                        blasts[n, BLAST_Y] = y
-                        blast_count[0] = n + 1
-                        into = 0
-                    else:
-                        out = False
-                        for k in range(4):
-                            nx = x + (1, 0, -1, 0)[k]
-                            ny = y + (0, 1, 0, -1)[k]
-                            if 0 <= nx < width and 0 <= ny < height and extinguishes[cells[ny, nx]] != 0:
-                                out = True
-                        if out:  # put out, and cooled to just below catching fire again
-                            f &= ~BURNING
-                            energy = min(energy, ignite_limit[e] - heat_cap[e] * TEMP_ONE)
-                        else:
-                            if energy < burn_limit[e]:
-                                energy = min(energy + burn_heat[e], burn_limit[e])
-                            left = timer[y, x]
-                            if left <= 1:  # burnt out
-                                into = ash[e] if ((fh >> 8) & 0xFFFFFF) < ash_chance[e] else 0
+        for j in range(segments):
+            cx = first_cx + (j if forward else segments - 1 - j)
+            if awake[cy, cx] == 0 and woken[cy, cx] == 0:
+                continue  # asleep: nothing here or next to it changed
+            sx0 = max(x0, cx << CHUNK_SHIFT)
+            sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
+            for i in range(sx1 - sx0):
+                x = sx0 + i if forward else sx1 - 1 - i
+                e = cells[y, x]
+                if e == 0 or (flags[y, x] & DONE) != 0:
+                    continue
+                busy = False  # did anything change, or might it on a later frame?
+                bx0 = bx1 = x  # the cells it moved between
+                by0 = by1 = y
+                for _ in range(1):  # one pass; `break` ends the cell's update
+                    # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
+                    f = flags[y, x]
+                    th = thermal[e]
+                    if th != 0 or (f & BURNING) != 0:
+                        energy = int(heat[y, x])
+                        into = e
+                        if energy > hot_limit[e]:
+                            into = heated_into[e]
+                        elif energy < cold_limit[e]:
+                            into = cooled_into[e]
+                        elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
+                            f |= BURNING
+                            timer[y, x] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
+                        lit = into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0)
+                        fh = _cell_key(fire_key ^ 0x5BD1E995, x, y) if lit else 0  # rolls for fire, only where there is fire
+                        if into == e and (f & BURNING) != 0:
+                            busy = True
+                            if (th & EXPLOSIVE) != 0:
+                                # It goes off: frozen for the rest of the frame, then the step's blasts are applied.
+                                flags[y, x] = f | DETONATING | DONE
+                                detonations[tile] += 1
+                                break
                             else:
-                                timer[y, x] = left - 1
-                                d = fh & 3
-                                nx = x + (1, 0, -1, 0)[d]
-                                ny = y + (0, 1, 0, -1)[d]
-                                product = flame[e]
-                                if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[ny, nx] == 0:
-                                    if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
-                                        cells[ny, nx] = product
-                                        shade[ny, nx], timer[ny, nx] = _spawn_state(
-                                            _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
-                                        )
-                                        vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
-                                        heat[ny, nx] = _energy(temp_start[product], heat_cap[product])
-                                        flags[ny, nx] = MOVED | LOOSE
-                if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
-                    # A flame lights the flammable cells it touches, each by its own chance.
-                    for k in range(4):
-                        nx = x + (1, 0, -1, 0)[k]
-                        ny = y + (0, 1, 0, -1)[k]
+                                out = False
+                                for k in range(4):
+                                    nx = x + (1, 0, -1, 0)[k]
+                                    ny = y + (0, 1, 0, -1)[k]
+                                    if 0 <= nx < width and 0 <= ny < height and extinguishes[cells[ny, nx]] != 0:
+                                        out = True
+                                if out:  # put out, and cooled to just below catching fire again
+                                    f &= ~BURNING
+                                    energy = min(energy, ignite_limit[e] - heat_cap[e] * TEMP_ONE)
+                                else:
+                                    if energy < burn_limit[e]:
+                                        energy = min(energy + burn_heat[e], burn_limit[e])
+                                    left = timer[y, x]
+                                    if left <= 1:  # burnt out
+                                        into = ash[e] if ((fh >> 8) & 0xFFFFFF) < ash_chance[e] else 0
+                                    else:
+                                        timer[y, x] = left - 1
+                                        d = fh & 3
+                                        nx = x + (1, 0, -1, 0)[d]
+                                        ny = y + (0, 1, 0, -1)[d]
+                                        product = flame[e]
+                                        if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[ny, nx] == 0:
+                                            if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
+                                                cells[ny, nx] = product
+                                                shade[ny, nx], timer[ny, nx] = _spawn_state(
+                                                    _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
+                                                )
+                                                vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
+                                                heat[ny, nx] = _energy(temp_start[product], heat_cap[product])
+                                                flags[ny, nx] = MOVED | LOOSE
+                        if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
+                            # A flame lights the flammable cells it touches, each by its own chance.
+                            for k in range(4):
+                                nx = x + (1, 0, -1, 0)[k]
+                                ny = y + (0, 1, 0, -1)[k]
+                                if nx < 0 or ny < 0 or nx >= width or ny >= height:
+                                    continue
+                                n = cells[ny, nx]
+                                if (thermal[n] & FLAMMABLE) != 0 and (flags[ny, nx] & BURNING) == 0:
+                                    busy = True  # lit now, or maybe on a later frame
+                                    if (_mix32(fh ^ (k + 1) * 0x9E3779B9) >> 8) < catch_chance[n]:
+                                        flags[ny, nx] |= BURNING
+                                        timer[ny, nx] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
+                        if into != e:
+                            busy = True
+                            cells[y, x] = into
+                            shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
+                            vx[y, x] = vy[y, x] = carry[y, x] = 0
+                            heat[y, x] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
+                            flags[y, x] = (f & FRESH) | MOVED
+                            break
+                        if energy != heat[y, x]:
+                            heat[y, x] = energy
+                            busy = True
+                        if f != flags[y, x]:
+                            flags[y, x] = f
+                            busy = True
+
+                    # 2. Lifetime: count down, and at zero become another element (not while burning).
+                    if life_frames[e] != 0 and (f & BURNING) == 0:
+                        busy = True
+                        left = timer[y, x]
+                        if left <= 1:
+                            into = life_into[e]
+                            cells[y, x] = into
+                            shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
+                            vx[y, x] = vy[y, x] = carry[y, x] = 0
+                            heat[y, x] = _energy(_temperature(int(heat[y, x]), heat_recip[e]), heat_cap[into])
+                            flags[y, x] = (flags[y, x] & FRESH) | MOVED
+                            break
+                        timer[y, x] = left - 1
+                    h = _cell_key(move_key, x, y)
+
+                    # 3. Reactions: try each touching neighbour once, in a hashed order.
+                    if reactive[e] != 0:
+                        reacted = False
+                        start = (h >> 1) & 3
+                        for k in range(4):
+                            d = (start + k) & 3
+                            nx = x + (1, 0, -1, 0)[d]
+                            ny = y + (0, 1, 0, -1)[d]
+                            if nx < 0 or ny < 0 or nx >= width or ny >= height or (flags[ny, nx] & REACTED) != 0:
+                                continue
+                            b = cells[ny, nx]
+                            threshold = react_chance[e, b]
+                            if threshold == 0:
+                                continue
+                            # One roll per touching pair and frame, the same whichever cell looks.
+                            roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
+                            ta = _temperature(int(heat[y, x]), heat_recip[e])
+                            tb = _temperature(int(heat[ny, nx]), heat_recip[b])
+                            if ta + tb < react_tsum_min[e, b] or ta + tb > react_tsum_max[e, b]:
+                                continue
+                            busy = True  # it reacts now, or may on a later frame
+                            if roll >= threshold:
+                                continue
+                            into_a = react_into_a[e, b]
+                            into_b = react_into_b[e, b]
+                            warm = react_heat[e, b]
+                            if into_a != e:
+                                cells[y, x] = into_a
+                                shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
+                                vx[y, x] = vy[y, x] = carry[y, x] = 0
+                                heat[y, x] = _energy(ta + warm, heat_cap[into_a])
+                                flags[y, x] &= FRESH
+                            if into_b != b:
+                                cells[ny, nx] = into_b
+                                shade[ny, nx], timer[ny, nx] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
+                                vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
+                                heat[ny, nx] = _energy(tb + warm, heat_cap[into_b])
+                                flags[ny, nx] &= FRESH
+                            flags[y, x] |= REACTED
+                            flags[ny, nx] |= REACTED
+                            reacted = True
+                            break
+                        if reacted:
+                            break
+
+                    # 4. Movement: choose up to four moves to try in order, then walk them.
+                    kind = archetype[e]
+                    if kind == STATIC:
+                        break
+                    old_vx = int(vx[y, x])
+                    old_vy = int(vy[y, x])
+                    cvx = old_vx
+                    cvy = old_vy
+                    loose = flags[y, x] & LOOSE
+                    g = fall_dir[e]
+                    falling = False
+                    coasting = False
+                    only_empty = kind == PARTICLE
+                    tries = 0
+                    d0x = d0y = d1x = d1y = d2x = d2y = d3x = d3y = 0
+                    if kind == PARTICLE:
+                        busy = True  # in flight until it lands
+                        r = _mix32(h ^ SALT_ROUND)  # rolls for rounding speeds to cells
+                        loose = 0  # set when it lands
+                        cvy += accel[e]
+                        keep = drag_keep[e]
+                        if keep != 256:
+                            cvx = _scaled(cvx, keep)
+                            cvy = _scaled(cvy, keep)
+                        cvx = _clamped(cvx, max_speed[e])
+                        cvy = _clamped(cvy, max_speed[e])
+                        d0x = _cells_moved(cvx, r & 255)
+                        d0y = _cells_moved(cvy, (r >> 8) & 255)
+                        tries = 1 if d0x != 0 or d0y != 0 else 0
+                    else:
+                        ty = y + g
+                        if 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x]):
+                            # Falling (rising): speed up, go at least one cell, drift sideways.
+                            falling = True
+                            r = _mix32(h ^ SALT_ROUND)
+                            speed = min(cvy * g + accel[e], max_speed[e])
+                            cvy = speed * g
+                            d0x = _cells_moved(cvx, (r >> 8) & 255)
+                            d0y = g * max(1, _cells_moved(speed, r & 255))
+                            d1y = g  # if the drift is blocked: straight on, one cell
+                            tries = 2
+                            loose = LOOSE
+                        elif g > 0 and cvy > 0 and 0 <= ty < height and vy[ty, x] > 0 and archetype[cells[ty, x]] != STATIC and (flags[ty, x] & DONE) == 0:
+                            busy = True  # the cell below falls too and has not had its turn (another tile's): wait for it
+                            break
+                        elif kind == POWDER:
+                            if loose == 0:
+                                break  # resting: stays put until the cell below opens or it is knocked
+                            # Landing turns speed sideways; sliding on the ground wears it down.
+                            u = abs(cvx)
+                            side = (1 if cvx > 0 else -1) if cvx != 0 else (1 if h & 1 else -1)
+                            impact = cvy * g
+                            if impact > 0 or u == 0:  # landing, or freshly placed
+                                u = min(max(u + ((impact * impact_share[e]) >> 8), MIN_SLIDE), max_speed[e])
+                            cvy = 0
+                            cvx = side * u
+                            if u >= STOP_SPEED:
+                                slide = _cells_moved(u, _mix32(h ^ SALT_ROUND) & 255)
+                                coasting = slide == 0  # too slow to cross a cell this frame
+                                d0x, d0y = side, g  # roll down the slope
+                                d1x = side * slide  # slide along the ground
+                                d2x, d2y = -side, g  # roll down the other side
+                                tries = 1 if coasting else 3
+                        else:
+                            # Liquids and gases on the ground: down a side, else flow sideways.
+                            cvx = cvy = 0
+                            if kind != LIQUID or (h >> 8) >= rest_chance[e]:  # viscous liquids often rest
+                                side = 1 if h & 1 else -1
+                                reach = int(dispersion[e])
+                                d0x, d0y = side, g
+                                d1x, d1y = -side, g
+                                d2x = side * reach
+                                d3x = -side * reach
+                                tries = 4 if reach > 0 else 2
+                            else:  # resting by chance: stay awake while there is somewhere to flow
+                                for k in range(4):
+                                    nx = x + (1, -1, 1, -1)[k]
+                                    ny = y + (g if k < 2 else 0)
+                                    if 0 <= nx < width and 0 <= ny < height:
+                                        if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
+                                            busy = True
+
+                    # Walk each move along the line traversal; the first that gets anywhere wins.
+                    px = x
+                    py = y
+                    hit = False
+                    used = -1
+                    for a in range(tries):
+                        if a == 0:
+                            dx, dy = d0x, d0y
+                        elif a == 1:
+                            dx, dy = d1x, d1y
+                        elif a == 2:
+                            dx, dy = d2x, d2y
+                        else:
+                            dx, dy = d3x, d3y
+                        steps = max(abs(dx), abs(dy))
+                        hit = False
+                        for k in range(1, steps + 1):
+                            qx, qy = _line_point(x, y, dx, dy, steps, k)
+                            if qx < 0 or qy < 0 or qx >= width or qy >= height:
+                                hit = True
+                                break
+                            o = cells[qy, qx]
+                            if o != 0 and (only_empty or k > 1 or not _enterable(displace[e, o], o, flags[qy, qx])):
+                                hit = archetype[o] != PARTICLE  # particles in a swarm wait for each other
+                                break
+                            if qx != px and qy != py:  # a diagonal step: one of its side cells must be open
+                                c1 = cells[py, qx]
+                                c2 = cells[qy, px]
+                                if only_empty:
+                                    side_open = c1 == 0 or c2 == 0
+                                    hit = archetype[c1] != PARTICLE and archetype[c2] != PARTICLE
+                                else:
+                                    side_open = displace[e, c1] != 0 or displace[e, c2] != 0
+                                    hit = True
+                                if not side_open:
+                                    break
+                                hit = False
+                            px = qx
+                            py = qy
+                            if o != 0:
+                                break  # swapped into a fluid: the move ends there
+                        if px != x or py != y:
+                            used = a
+                            break
+
+                    # Settle the new velocity.
+                    entered = cells[py, px]  # what the mover swaps with (0 when it goes into empty)
+                    if kind == PARTICLE:
+                        if hit or (tries == 0 and cvx == 0 and cvy == 0):
+                            loose = LOOSE  # it lands: what it carries takes its place, moving as it flew
+                    elif falling:
+                        if entered != 0:
+                            cvx = cvy = 0  # into a fluid: slowed to a crawl
+                        elif used == 1:
+                            cvx = 0  # drift blocked
+                    elif kind == POWDER:
+                        # Friction brakes every frame of contact; rolling down a step gains speed.
+                        u = abs(cvx) - _scaled(accel[e], friction[e]) + (accel[e] if py != y else 0)
+                        if (used < 0 and not coasting) or u < STOP_SPEED or entered != 0:
+                            loose = 0  # at rest (it may have moved this frame)
+                            cvx = 0
+                        else:
+                            cvx = (1 if (px > x or (px == x and cvx > 0)) else -1) * min(u, max_speed[e])
+
+                    if used < 0 and not (kind == PARTICLE and loose != 0):
+                        if cvx != old_vx or cvy != old_vy:
+                            vx[y, x] = cvx
+                            vy[y, x] = cvy
+                            busy = True
+                        if kind == POWDER and (flags[y, x] & LOOSE) != loose:
+                            flags[y, x] ^= LOOSE
+                            busy = True
+                        busy = busy or (kind == POWDER and loose != 0)  # a loose grain is still in motion
+                        break
+
+                    busy = True
+                    bx0 = min(x, px)
+                    bx1 = max(x, px)
+                    by0 = min(y, py)
+                    by1 = max(y, py)
+
+                    # Move: swap everything with the cell at the end of the walk.
+                    marks = flags[y, x] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
+                    if px != x or py != y:
+                        cells[y, x] = entered
+                        cells[py, px] = e
+                        shade[y, x], shade[py, px] = shade[py, px], shade[y, x]
+                        timer[y, x], timer[py, px] = timer[py, px], timer[y, x]
+                        carry[y, x], carry[py, px] = carry[py, px], carry[y, x]
+                        heat[y, x], heat[py, px] = heat[py, px], heat[y, x]
+                        vx[y, x] = vx[py, px]
+                        vy[y, x] = vy[py, px]
+                        flags[y, x] = MOVED | (flags[py, px] & KEPT)
+                    vx[py, px] = cvx
+                    vy[py, px] = cvy
+                    flags[py, px] = MOVED | loose | marks
+
+                    if kind == PARTICLE:
+                        if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
+                            into = carry[py, px]
+                            cells[py, px] = into
+                            carry[py, px] = 0
+                            heat[py, px] = _energy(_temperature(int(heat[py, px]), heat_recip[e]), heat_cap[into])
+                            if into == 0:
+                                vx[py, px] = vy[py, px] = 0
+                            elif life_frames[e] != 0:  # the particle's own clock ran: start the cargo's
+                                _, timer[py, px] = _spawn_state(_cell_key(spawn_key, px, py), life_frames[into], life_jitter[into])
+                        break
+
+                    # A move knocks resting grains loose: those that could follow into the
+                    # vacated cell (pushed towards it) and those beside the arrival (pushed away).
+                    for k in range(6):
+                        if k < 4:
+                            nx = x + (-1, 1, -1, 1)[k]
+                            ny = y - (0, 0, 1, 1)[k]
+                            push = (1, -1, 1, -1)[k]
+                        else:
+                            nx = px + (-1, 1)[k - 4]
+                            ny = py
+                            push = (-1, 1)[k - 4]
                         if nx < 0 or ny < 0 or nx >= width or ny >= height:
                             continue
-                        n = cells[ny, nx]
-                        if (thermal[n] & FLAMMABLE) != 0 and (flags[ny, nx] & BURNING) == 0:
-                            if (_mix32(fh ^ (k + 1) * 0x9E3779B9) >> 8) < catch_chance[n]:
-                                flags[ny, nx] |= BURNING
-                                timer[ny, nx] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
-                if into != e:
-                    cells[y, x] = into
-                    shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
-                    vx[y, x] = vy[y, x] = carry[y, x] = 0
-                    heat[y, x] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
-                    flags[y, x] = (f & FRESH) | MOVED
-                    continue
-                if energy != heat[y, x]:
-                    heat[y, x] = energy
-                if f != flags[y, x]:
-                    flags[y, x] = f
+                        c = cells[ny, nx]
+                        if archetype[c] == POWDER and (flags[ny, nx] & LOOSE) == 0:
+                            if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
+                                flags[ny, nx] |= LOOSE
+                                vx[ny, nx] = push * KNOCK_SPEED
 
-            # 2. Lifetime: count down, and at zero become another element (not while burning).
-            if life_frames[e] != 0 and (f & BURNING) == 0:
-                left = timer[y, x]
-                if left <= 1:
-                    into = life_into[e]
-                    cells[y, x] = into
-                    shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
-                    vx[y, x] = vy[y, x] = carry[y, x] = 0
-                    heat[y, x] = _energy(_temperature(int(heat[y, x]), heat_recip[e]), heat_cap[into])
-                    flags[y, x] = (flags[y, x] & FRESH) | MOVED
-                    continue
-                timer[y, x] = left - 1
-            h = _cell_key(move_key, x, y)
-
-            # 3. Reactions: try each touching neighbour once, in a hashed order.
-            if reactive[e] != 0:
-                reacted = False
-                start = (h >> 1) & 3
-                for k in range(4):
-                    d = (start + k) & 3
-                    nx = x + (1, 0, -1, 0)[d]
-                    ny = y + (0, 1, 0, -1)[d]
-                    if nx < 0 or ny < 0 or nx >= width or ny >= height or (flags[ny, nx] & REACTED) != 0:
-                        continue
-                    b = cells[ny, nx]
-                    threshold = react_chance[e, b]
-                    if threshold == 0:
-                        continue
-                    # One roll per touching pair and frame, the same whichever cell looks.
-                    roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
-                    if roll >= threshold:
-                        continue
-                    ta = _temperature(int(heat[y, x]), heat_recip[e])
-                    tb = _temperature(int(heat[ny, nx]), heat_recip[b])
-                    if ta + tb < react_tsum_min[e, b] or ta + tb > react_tsum_max[e, b]:
-                        continue
-                    into_a = react_into_a[e, b]
-                    into_b = react_into_b[e, b]
-                    warm = react_heat[e, b]
-                    if into_a != e:
-                        cells[y, x] = into_a
-                        shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
-                        vx[y, x] = vy[y, x] = carry[y, x] = 0
-                        heat[y, x] = _energy(ta + warm, heat_cap[into_a])
-                        flags[y, x] &= FRESH
-                    if into_b != b:
-                        cells[ny, nx] = into_b
-                        shade[ny, nx], timer[ny, nx] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
-                        vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
-                        heat[ny, nx] = _energy(tb + warm, heat_cap[into_b])
-                        flags[ny, nx] &= FRESH
-                    flags[y, x] |= REACTED
-                    flags[ny, nx] |= REACTED
-                    reacted = True
-                    break
-                if reacted:
-                    continue
-
-            # 4. Movement: choose up to four moves to try in order, then walk them.
-            kind = archetype[e]
-            if kind == STATIC:
-                continue
-            old_vx = int(vx[y, x])
-            old_vy = int(vy[y, x])
-            cvx = old_vx
-            cvy = old_vy
-            loose = flags[y, x] & LOOSE
-            g = fall_dir[e]
-            falling = False
-            coasting = False
-            only_empty = kind == PARTICLE
-            tries = 0
-            d0x = d0y = d1x = d1y = d2x = d2y = d3x = d3y = 0
-            if kind == PARTICLE:
-                r = _mix32(h ^ SALT_ROUND)  # rolls for rounding speeds to cells
-                loose = 0  # set when it lands
-                cvy += accel[e]
-                keep = drag_keep[e]
-                if keep != 256:
-                    cvx = _scaled(cvx, keep)
-                    cvy = _scaled(cvy, keep)
-                cvx = _clamped(cvx, max_speed[e])
-                cvy = _clamped(cvy, max_speed[e])
-                d0x = _cells_moved(cvx, r & 255)
-                d0y = _cells_moved(cvy, (r >> 8) & 255)
-                tries = 1 if d0x != 0 or d0y != 0 else 0
-            else:
-                ty = y + g
-                if 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x]):
-                    # Falling (rising): speed up, go at least one cell, drift sideways.
-                    falling = True
-                    r = _mix32(h ^ SALT_ROUND)
-                    speed = min(cvy * g + accel[e], max_speed[e])
-                    cvy = speed * g
-                    d0x = _cells_moved(cvx, (r >> 8) & 255)
-                    d0y = g * max(1, _cells_moved(speed, r & 255))
-                    d1y = g  # if the drift is blocked: straight on, one cell
-                    tries = 2
-                    loose = LOOSE
-                elif kind == POWDER:
-                    if loose == 0:
-                        continue  # resting: stays put until the cell below opens or it is knocked
-                    # Landing turns speed sideways; sliding on the ground wears it down.
-                    u = abs(cvx)
-                    side = (1 if cvx > 0 else -1) if cvx != 0 else (1 if h & 1 else -1)
-                    impact = cvy * g
-                    if impact > 0 or u == 0:  # landing, or freshly placed
-                        u = min(max(u + ((impact * impact_share[e]) >> 8), MIN_SLIDE), max_speed[e])
-                    cvy = 0
-                    cvx = side * u
-                    if u >= STOP_SPEED:
-                        slide = _cells_moved(u, _mix32(h ^ SALT_ROUND) & 255)
-                        coasting = slide == 0  # too slow to cross a cell this frame
-                        d0x, d0y = side, g  # roll down the slope
-                        d1x = side * slide  # slide along the ground
-                        d2x, d2y = -side, g  # roll down the other side
-                        tries = 1 if coasting else 3
-                else:
-                    # Liquids and gases on the ground: down a side, else flow sideways.
-                    cvx = cvy = 0
-                    if kind != LIQUID or (h >> 8) >= rest_chance[e]:  # viscous liquids often rest
-                        side = 1 if h & 1 else -1
-                        reach = int(dispersion[e])
-                        d0x, d0y = side, g
-                        d1x, d1y = -side, g
-                        d2x = side * reach
-                        d3x = -side * reach
-                        tries = 4 if reach > 0 else 2
-
-            # Walk each move along the line traversal; the first that gets anywhere wins.
-            px = x
-            py = y
-            hit = False
-            used = -1
-            for a in range(tries):
-                if a == 0:
-                    dx, dy = d0x, d0y
-                elif a == 1:
-                    dx, dy = d1x, d1y
-                elif a == 2:
-                    dx, dy = d2x, d2y
-                else:
-                    dx, dy = d3x, d3y
-                steps = max(abs(dx), abs(dy))
-                hit = False
-                for k in range(1, steps + 1):
-                    qx, qy = _line_point(x, y, dx, dy, steps, k)
-                    if qx < 0 or qy < 0 or qx >= width or qy >= height:
-                        hit = True
-                        break
-                    o = cells[qy, qx]
-                    if o != 0 and (only_empty or k > 1 or not _enterable(displace[e, o], o, flags[qy, qx])):
-                        hit = archetype[o] != PARTICLE  # particles in a swarm wait for each other
-                        break
-                    if qx != px and qy != py:  # a diagonal step: one of its side cells must be open
-                        c1 = cells[py, qx]
-                        c2 = cells[qy, px]
-                        if only_empty:
-                            side_open = c1 == 0 or c2 == 0
-                            hit = archetype[c1] != PARTICLE and archetype[c2] != PARTICLE
-                        else:
-                            side_open = displace[e, c1] != 0 or displace[e, c2] != 0
-                            hit = True
-                        if not side_open:
-                            break
-                        hit = False
-                    px = qx
-                    py = qy
-                    if o != 0:
-                        break  # swapped into a fluid: the move ends there
-                if px != x or py != y:
-                    used = a
-                    break
-
-            # Settle the new velocity.
-            entered = cells[py, px]  # what the mover swaps with (0 when it goes into empty)
-            if kind == PARTICLE:
-                if hit or (tries == 0 and cvx == 0 and cvy == 0):
-                    loose = LOOSE  # it lands: what it carries takes its place, moving as it flew
-            elif falling:
-                if entered != 0:
-                    cvx = cvy = 0  # into a fluid: slowed to a crawl
-                elif used == 1:
-                    cvx = 0  # drift blocked
-            elif kind == POWDER:
-                # Friction brakes every frame of contact; rolling down a step gains speed.
-                u = abs(cvx) - _scaled(accel[e], friction[e]) + (accel[e] if py != y else 0)
-                if (used < 0 and not coasting) or u < STOP_SPEED or entered != 0:
-                    loose = 0  # at rest (it may have moved this frame)
-                    cvx = 0
-                else:
-                    cvx = (1 if (px > x or (px == x and cvx > 0)) else -1) * min(u, max_speed[e])
-
-            if used < 0 and not (kind == PARTICLE and loose != 0):
-                if cvx != old_vx or cvy != old_vy:
-                    vx[y, x] = cvx
-                    vy[y, x] = cvy
-                if kind == POWDER:
-                    flags[y, x] = (flags[y, x] & ~LOOSE) | loose
-                continue
-
-            # Move: swap everything with the cell at the end of the walk.
-            marks = flags[y, x] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
-            if px != x or py != y:
-                cells[y, x] = entered
-                cells[py, px] = e
-                shade[y, x], shade[py, px] = shade[py, px], shade[y, x]
-                timer[y, x], timer[py, px] = timer[py, px], timer[y, x]
-                carry[y, x], carry[py, px] = carry[py, px], carry[y, x]
-                heat[y, x], heat[py, px] = heat[py, px], heat[y, x]
-                vx[y, x] = vx[py, px]
-                vy[y, x] = vy[py, px]
-                flags[y, x] = MOVED | (flags[py, px] & KEPT)
-            vx[py, px] = cvx
-            vy[py, px] = cvy
-            flags[py, px] = MOVED | loose | marks
-
-            if kind == PARTICLE:
-                if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
-                    into = carry[py, px]
-                    cells[py, px] = into
-                    carry[py, px] = 0
-                    heat[py, px] = _energy(_temperature(int(heat[py, px]), heat_recip[e]), heat_cap[into])
-                    if into == 0:
-                        vx[py, px] = vy[py, px] = 0
-                    elif life_frames[e] != 0:  # the particle's own clock ran: start the cargo's
-                        _, timer[py, px] = _spawn_state(_cell_key(spawn_key, px, py), life_frames[into], life_jitter[into])
-                continue
-
-            # A move knocks resting grains loose: those that could follow into the
-            # vacated cell (pushed towards it) and those beside the arrival (pushed away).
-            for k in range(6):
-                if k < 4:
-                    nx = x + (-1, 1, -1, 1)[k]
-                    ny = y - (0, 0, 1, 1)[k]
-                    push = (1, -1, 1, -1)[k]
-                else:
-                    nx = px + (-1, 1)[k - 4]
-                    ny = py
-                    push = (-1, 1)[k - 4]
-                if nx < 0 or ny < 0 or nx >= width or ny >= height:
-                    continue
-                c = cells[ny, nx]
-                if archetype[c] == POWDER and (flags[ny, nx] & LOOSE) == 0:
-                    if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
-                        flags[ny, nx] |= LOOSE
-                        vx[ny, nx] = push * KNOCK_SPEED
+                if busy:  # wake every chunk within two cells of the cells it moved between
+                    for wy in range(max(by0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((by1 + WAKE_MARGIN) >> CHUNK_SHIFT, last_cy) + 1):
+                        for wx in range(max(bx0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((bx1 + WAKE_MARGIN) >> CHUNK_SHIFT, last_cx) + 1):
+                            woken[wy, wx] = 1
 
 
 @njit(cache=True)
-def clear_marks(flags):
-    """Forget what moved and reacted last frame; keep what travels with the cells."""
-    for y in range(flags.shape[0]):
-        for x in range(flags.shape[1]):
-            flags[y, x] &= KEPT
-
-
-@njit(cache=True)
-def conduct(s, t, frame, x0, y0, x1, y1):
-    """Heat flows between touching cells of rows y0..y1-1 and columns x0..x1-1 (and
-    the row below and column right of them), and cells with ``cooling`` lose heat to the outside.
+def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
+    """Heat flows between touching cells of the awake chunks among rows y0..y1-1 and
+    columns x0..x1-1 (and the row below and column right of them), and cells with
+    ``cooling`` lose heat to the outside.
 
     Each touching pair exchanges ``g * (T_a - T_b)`` of energy, where ``g`` is
     the smaller of the two cells' conductance (conductivity x capacity / 4),
@@ -532,56 +569,148 @@ def conduct(s, t, frame, x0, y0, x1, y1):
     the scheme is stable for any conductivities. What one cell loses the other
     gains, so conduction alone conserves the total exactly. The sweep runs
     forwards on even frames and backwards on odd ones, so heat has no
-    favourite direction.
+    favourite direction. A cell whose heat changes wakes the chunks around it.
     """
     cells, heat = s.cells, s.heat
     height, width = cells.shape
     heat_cap, heat_recip, conductance, cooling = t.heat_cap, t.heat_recip, t.conductance, t.cooling
     ambient = int(t.temp_start[0])  # the air's temperature is the world's outside
     backwards = (frame & 1) == 1
-    for j in range(y1 - y0):
-        y = y1 - 1 - j if backwards else y0 + j
-        for i in range(x1 - x0):
-            x = x1 - 1 - i if backwards else x0 + i
-            e = cells[y, x]
-            energy = int(heat[y, x])
-            if cooling[e] != 0:
-                loss = _scaled(_energy(ambient, heat_cap[e]) - energy, cooling[e])
-                if loss != 0:
-                    energy += loss
-                    heat[y, x] = energy
-            g_own = conductance[e]
-            if g_own == 0:
+    last_cx, last_cy = (width - 1) >> CHUNK_SHIFT, (height - 1) >> CHUNK_SHIFT
+    first_cx = x0 >> CHUNK_SHIFT
+    segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
+    for r in range(y1 - y0):
+        y = y1 - 1 - r if backwards else y0 + r
+        cy = y >> CHUNK_SHIFT
+        for j in range(segments):
+            cx = first_cx + (segments - 1 - j if backwards else j)
+            if awake[cy, cx] == 0 and woken[cy, cx] == 0:
                 continue
-            for k in range(2):
-                nx = x + 1 - k
-                ny = y + k
-                if nx >= width or ny >= height:
+            sx0 = max(x0, cx << CHUNK_SHIFT)
+            sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
+            for i in range(sx1 - sx0):
+                x = sx1 - 1 - i if backwards else sx0 + i
+                e = cells[y, x]
+                energy = int(heat[y, x])
+                changed = False
+                if cooling[e] != 0:
+                    loss = _scaled(_energy(ambient, heat_cap[e]) - energy, cooling[e])
+                    if loss != 0:
+                        energy += loss
+                        heat[y, x] = energy
+                        changed = True
+                g_own = conductance[e]
+                if g_own != 0:
+                    for k in range(2):
+                        nx = x + 1 - k
+                        ny = y + k
+                        if nx >= width or ny >= height:
+                            continue
+                        n = cells[ny, nx]
+                        other = int(heat[ny, nx])
+                        if other * heat_cap[e] == energy * heat_cap[n]:
+                            continue  # the common case: the same temperature (E_a / C_a == E_b / C_b)
+                        g = min(g_own, conductance[n])
+                        gap = _temperature(energy, heat_recip[e]) - _temperature(other, heat_recip[n])
+                        flow = _scaled(gap * g, 1)
+                        if flow != 0:
+                            energy -= flow
+                            heat[y, x] = energy
+                            heat[ny, nx] = other + flow
+                            changed = True
+                if changed:  # wake the chunks of the cells next to it and to its partners
+                    for wy in range(max(y - 1, 0) >> CHUNK_SHIFT, min((y + 2) >> CHUNK_SHIFT, last_cy) + 1):
+                        for wx in range(max(x - 1, 0) >> CHUNK_SHIFT, min((x + 2) >> CHUNK_SHIFT, last_cx) + 1):
+                            woken[wy, wx] = 1
+
+
+@njit(cache=True, parallel=True)
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations):
+    """Advance the world by one frame; returns how many explosives went off (see :func:`take_detonations`).
+
+    The world is cut into tiles of 2 x 2 chunks, updated in four passes by
+    the parity of their column and row; the tiles of one pass are a tile apart,
+    farther than anything one cell does can reach, so they are updated at the
+    same time on as many threads as there are, with the same result as one
+    after another. Within a tile, heat flows first, then the cells move. Only
+    chunks that are awake are touched; ``awake`` then holds the chunks to
+    update next frame.
+    """
+    flags = s.flags
+    height, width = flags.shape
+    chunks_y, chunks_x = awake.shape
+    tiles_y = (height + TILE - 1) >> TILE_SHIFT
+    tiles_x = (width + TILE - 1) >> TILE_SHIFT
+    woken[:] = 0
+    detonations[:] = 0
+    for cy in prange(chunks_y):  # forget last frame's marks (only awake chunks have any)
+        for cx in range(chunks_x):
+            if awake[cy, cx] != 0:
+                for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
+                    for x in range(cx << CHUNK_SHIFT, min((cx + 1) << CHUNK_SHIFT, width)):
+                        flags[y, x] &= KEPT
+    todo = np.empty(tiles_y * tiles_x, np.int64)
+    for p in range(4):
+        # Alternate which rows of tiles go first, so a falling stream crosses each seam in step.
+        py = (p >> 1) ^ (frame & 1) ^ 1
+        px = (p & 1) ^ ((frame >> 1) & 1)
+        count = 0
+        for ty in range(py, tiles_y, 2):
+            for tx in range(px, tiles_x, 2):
+                cy0, cx0 = ty * 2, tx * 2
+                cy1, cx1 = min(cy0 + 2, chunks_y), min(cx0 + 2, chunks_x)
+                if awake[cy0:cy1, cx0:cx1].any() or woken[cy0:cy1, cx0:cx1].any():
+                    todo[count] = ty * tiles_x + tx
+                    count += 1
+        for k in prange(count):
+            tile = todo[k]
+            x0 = (tile % tiles_x) << TILE_SHIFT
+            y0 = (tile // tiles_x) << TILE_SHIFT
+            x1 = min(x0 + TILE, width)
+            y1 = min(y0 + TILE, height)
+            conduct(s, t, frame, awake, woken, x0, y0, x1, y1)
+            step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tile, x0, y0, x1, y1)
+    awake[:] = woken
+    return detonations.sum()
+
+
+@njit(cache=True)
+def take_detonations(s, t, detonations):
+    """The blasts of the explosives that went off this step, top to bottom and left to right.
+
+    Their cells are emptied (keeping their temperature); each blast then
+    destroys its own centre.
+    """
+    cells, flags, heat = s.cells, s.flags, s.heat
+    height, width = cells.shape
+    tiles_x = (width + TILE - 1) >> TILE_SHIFT
+    rows = np.empty((detonations.sum(), BLAST_COLUMNS), np.int64)
+    keys = np.empty(len(rows), np.int64)
+    n = 0
+    for tile in range(len(detonations)):
+        if detonations[tile] == 0:
+            continue
+        x0 = (tile % tiles_x) << TILE_SHIFT
+        y0 = (tile // tiles_x) << TILE_SHIFT
+        for y in range(y0, min(y0 + TILE, height)):
+            for x in range(x0, min(x0 + TILE, width)):
+                if (flags[y, x] & DETONATING) == 0:
                     continue
-                n = cells[ny, nx]
-                other = int(heat[ny, nx])
-                if other * heat_cap[e] == energy * heat_cap[n]:
-                    continue  # the common case: the same temperature (E_a / C_a == E_b / C_b)
-                g = min(g_own, conductance[n])
-                gap = _temperature(energy, heat_recip[e]) - _temperature(other, heat_recip[n])
-                flow = _scaled(gap * g, 1)
-                if flow != 0:
-                    energy -= flow
-                    heat[y, x] = energy
-                    heat[ny, nx] = other + flow
+                e = cells[y, x]
+                rows[n, :] = t.blast[e, :]
+                rows[n, BLAST_X] = x
+                rows[n, BLAST_Y] = y
+                keys[n] = y * width + x
+                n += 1
+                heat[y, x] = _energy(_temperature(int(heat[y, x]), t.heat_recip[e]), t.heat_cap[0])
+                cells[y, x] = 0
+                flags[y, x] = MOVED
+                s.timer[y, x] = s.vx[y, x] = s.vy[y, x] = s.carry[y, x] = 0
+    return rows[np.argsort(keys)]
 
 
 @njit(cache=True)
-def step(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count):
-    """Advance the whole world by one frame; explosions it sets off are queued in ``blasts``."""
-    clear_marks(s.flags)
-    height, width = s.cells.shape
-    conduct(s, t, frame, 0, 0, width, height)
-    step_region(s, t, move_key, react_key, spawn_key, frame, blasts, blast_count, 0, 0, width, height)
-
-
-@njit(cache=True)
-def explode(s, t, blasts, count, key, particle):
+def explode(s, t, blasts, count, key, particle, awake):
     """Set off the first ``count`` explosions of ``blasts``, one after another.
 
     Each blast sends a ray from its centre to every cell on the border of the
@@ -594,7 +723,8 @@ def explode(s, t, blasts, count, key, particle):
     strength could break. Rays only read the world, so a cell that several rays
     reach is destroyed or scorched once, whatever the order of the rays.
     Destroyed powder and liquid cells may fly off as particles; scorched cells
-    darken, with a chance that falls off across the fringe.
+    darken, with a chance that falls off across the fringe. The chunks a blast
+    reaches are marked ``awake``.
     """
     cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
     height, width = cells.shape
@@ -604,6 +734,9 @@ def explode(s, t, blasts, count, key, particle):
         cx, cy = blasts[b, BLAST_X], blasts[b, BLAST_Y]
         radius, strength, scorch = blasts[b, BLAST_RADIUS], blasts[b, BLAST_STRENGTH], blasts[b, BLAST_SCORCH]
         reach = radius + scorch
+        for wy in range(max(cy - reach - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((cy + reach + WAKE_MARGIN) >> CHUNK_SHIFT, awake.shape[0] - 1) + 1):
+            for wx in range(max(cx - reach - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((cx + reach + WAKE_MARGIN) >> CHUNK_SHIFT, awake.shape[1] - 1) + 1):
+                awake[wy, wx] = 1
         # 0: untouched; 1: destroyed; 2 + d: fringe cell d cells past the destruction (the nearest ray's d).
         mark = np.zeros((2 * reach + 1, 2 * reach + 1), np.int16)
         if 0 <= cx < width and 0 <= cy < height:

@@ -19,9 +19,6 @@ import numpy as np
 
 from .compiler import (
     ARCHETYPE_CODES,
-    BLAST_COLUMNS,
-    BLAST_X,
-    BLAST_Y,
     GLOW_COLOURS,
     GLOW_FROM,
     GLOW_STEP,
@@ -55,8 +52,20 @@ REACTED = 2  # reacted this frame
 LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
 BURNING = 8  # on fire: the timer counts down the burning time
 SCORCHED = 16  # darkened by a blast
-#: Explosions one frame may queue; a cell that finds the queue full goes off next frame.
-BLAST_QUEUE = 4096
+DETONATING = 32  # an explosive going off this frame (its blast comes after the step)
+
+# Sleeping chunks and parallel tiles. The world is cut into chunks of CHUNK x CHUNK
+# cells; a chunk is updated only while something in it or within WAKE_MARGIN cells
+# of it changes. Tiles of 2 x 2 chunks are updated in four passes, the tiles of
+# one pass in parallel: no cell's update reaches further than REACH cells (its
+# fastest move plus a neighbour), so tiles a tile apart never touch the same cells.
+CHUNK_SHIFT = 5
+CHUNK = 1 << CHUNK_SHIFT
+TILE_SHIFT = CHUNK_SHIFT + 1
+TILE = 1 << TILE_SHIFT
+WAKE_MARGIN = 2
+REACH = MAX_SPEED + 1
+assert 2 * (REACH + WAKE_MARGIN) < TILE, "tiles of one pass must not reach each other's chunks"
 
 
 def _on(start: int, stop: int | None, frame: int) -> bool:
@@ -148,8 +157,10 @@ class World:
             carry=np.zeros(shape, np.uint16),
             heat=np.zeros(shape, np.int32),
         )
-        self.blasts = np.zeros((BLAST_QUEUE, BLAST_COLUMNS), np.int64)  # explosions queued during a step
-        self.blast_count = np.zeros(1, np.int64)
+        chunks = (-(-height // CHUNK), -(-width // CHUNK))
+        self.awake = np.ones(chunks, np.uint8)  # chunks to update on the next step
+        self._woken = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks woken during a step
+        self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
@@ -187,6 +198,7 @@ class World:
         s.flags[ys, xs] = LOOSE
         s.vx[ys, xs] = s.vy[ys, xs] = s.carry[ys, xs] = 0
         s.heat[ys, xs] = t.heat_cap[element] * t.temp_start[element]
+        self.wake(ys, xs)
         return len(xs)
 
     def launch(self, ys: np.ndarray, xs: np.ndarray, vx: np.ndarray, vy: np.ndarray) -> int:
@@ -204,6 +216,7 @@ class World:
         s.cells[ys, xs] = self.ruleset.particle
         self._set_velocity(ys, xs, vx, vy)
         self._set_temperature(ys, xs, celsius)
+        self.wake(ys, xs)
         return len(xs)
 
     def spawn_particles(self, ys: np.ndarray, xs: np.ndarray, element: int, vx: np.ndarray, vy: np.ndarray) -> int:
@@ -254,6 +267,30 @@ class World:
         s = self.state
         units = np.round(np.asarray(celsius, float) * TEMP_ONE).astype(np.int64)
         s.heat[ys, xs] = self.tables.heat_cap[s.cells[ys, xs]] * units
+        self.wake(ys, xs)
+
+    def wake(self, ys: np.ndarray | None = None, xs: np.ndarray | None = None) -> None:
+        """Update the chunks around the given cells (all chunks, without cells) on the next step.
+
+        The world's own methods call this; code that writes ``state`` arrays
+        directly must call it too, or chunks at rest will not notice the change.
+        """
+        if ys is None or xs is None:
+            self.awake[:] = 1
+            return
+        ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
+        if ys.size == 0:
+            return
+        for dy in (-WAKE_MARGIN, WAKE_MARGIN):
+            for dx in (-WAKE_MARGIN, WAKE_MARGIN):
+                cy = np.clip(ys + dy, 0, self.height - 1) >> CHUNK_SHIFT
+                cx = np.clip(xs + dx, 0, self.width - 1) >> CHUNK_SHIFT
+                self.awake[cy, cx] = 1
+
+    @property
+    def awake_fraction(self) -> float:
+        """The share of chunks the next step will update (woken ones not counted)."""
+        return float(self.awake.mean())
 
     def heat_total(self) -> int:
         """The sum of every cell's heat energy (conduction keeps it; sources and cooling change it)."""
@@ -271,11 +308,11 @@ class World:
         from .kernel import explode
 
         key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
-        explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle)
+        explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake)
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the kernel updates every cell, explosions go off."""
-        from .kernel import step
+        from .kernel import step, take_detonations
 
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
@@ -286,22 +323,19 @@ class World:
             if spray.active(self.frame):
                 ys, xs, vx, vy = spray.shots(self.seed, self.frame)
                 self.spawn_particles(ys, xs, spray.element, vx, vy)
-        step(
+        went_off = step(
             self.state,
             self.tables,
             frame_key(self.seed, self.frame, SALT_MOVE),
             frame_key(self.seed, self.frame, SALT_REACT),
             frame_key(self.seed, self.frame, SALT_SPAWN),
             self.frame,
-            self.blasts,
-            self.blast_count,
+            self.awake,
+            self._woken,
+            self._detonations,
         )
-        count = int(self.blast_count[0])
-        if count:  # in a fixed order (top to bottom, left to right), whatever order the kernel queued them
-            queued = self.blasts[:count]
-            queued[:] = queued[np.lexsort((queued[:, BLAST_X], queued[:, BLAST_Y]))]
-            self._explode(queued, 0)
-            self.blast_count[0] = 0
+        if went_off:  # top to bottom, left to right, whichever thread found them
+            self._explode(take_detonations(self.state, self.tables, self._detonations), 0)
         due = [row for frame, row in self.scheduled if frame == self.frame]
         if due:  # the world file's, in its order
             self._explode(np.array(due), 1)
