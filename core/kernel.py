@@ -37,26 +37,16 @@ and return plain numbers only.
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
-
-def kernel_cache_dir() -> Path:
-    """Where compiled kernels are kept: ``$NUMBA_CACHE_DIR``, else the user's cache folder.
-
-    Not beside the installed package, where numba would put them by default:
-    files pip did not install would survive an uninstall there, leaving a
-    stray ``sandmod`` folder that shadows a later editable install.
-    """
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return Path(os.environ["NUMBA_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or os.environ.get("LOCALAPPDATA") or Path.home() / ".cache"
-    return Path(base) / "sandmod" / "numba"
-
+from .kernelcache import kernel_cache_dir
 
 os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
 
+import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from numba import njit, prange  # noqa: E402
+
+numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was imported before us
 
 from . import hashing, traversal  # noqa: E402
 from .compiler import (  # noqa: E402
@@ -177,7 +167,6 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
     ash, ash_chance, extinguishes = t.ash, t.ash_chance, t.extinguishes
     knock_key = _mix32(move_key ^ SALT_KNOCK)
     fire_key = _mix32(move_key ^ SALT_FIRE)
-    last_cx, last_cy = (width - 1) >> CHUNK_SHIFT, (height - 1) >> CHUNK_SHIFT
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
 
@@ -406,7 +395,17 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                         else:
                             # Liquids and gases on the ground: down a side, else flow sideways.
                             cvx = cvy = 0
-                            if kind != LIQUID or (h >> 8) >= rest_chance[e]:  # viscous liquids often rest
+                            can_flow = False  # is the first cell of any of its moves open?
+                            for k in range(4):
+                                nx = x + (1, -1, 1, -1)[k]
+                                ny = y + (g if k < 2 else 0)
+                                if 0 <= nx < width and 0 <= ny < height:
+                                    if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
+                                        can_flow = True
+                                        break
+                            if can_flow and kind == LIQUID and (h >> 8) < rest_chance[e]:
+                                busy = True  # viscous liquids often rest; stay awake while it could flow
+                            elif can_flow:
                                 side = 1 if h & 1 else -1
                                 reach = int(dispersion[e])
                                 d0x, d0y = side, g
@@ -414,13 +413,6 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                                 d2x = side * reach
                                 d3x = -side * reach
                                 tries = 4 if reach > 0 else 2
-                            else:  # resting by chance: stay awake while there is somewhere to flow
-                                for k in range(4):
-                                    nx = x + (1, -1, 1, -1)[k]
-                                    ny = y + (g if k < 2 else 0)
-                                    if 0 <= nx < width and 0 <= ny < height:
-                                        if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
-                                            busy = True
 
                     # Walk each move along the line traversal; the first that gets anywhere wins.
                     px = x
@@ -551,9 +543,16 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                                 vx[ny, nx] = push * KNOCK_SPEED
 
                 if busy:  # wake every chunk within two cells of the cells it moved between
-                    for wy in range(max(by0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((by1 + WAKE_MARGIN) >> CHUNK_SHIFT, last_cy) + 1):
-                        for wx in range(max(bx0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((bx1 + WAKE_MARGIN) >> CHUNK_SHIFT, last_cx) + 1):
-                            woken[wy, wx] = 1
+                    wy0 = max(by0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT
+                    wy1 = min(by1 + WAKE_MARGIN, height - 1) >> CHUNK_SHIFT
+                    wx0 = max(bx0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT
+                    wx1 = min(bx1 + WAKE_MARGIN, width - 1) >> CHUNK_SHIFT
+                    if wy0 == wy1 and wx0 == wx1:  # the common case: well inside one chunk
+                        woken[wy0, wx0] = 1
+                    else:
+                        for wy in range(wy0, wy1 + 1):
+                            for wx in range(wx0, wx1 + 1):
+                                woken[wy, wx] = 1
 
 
 @njit(cache=True)

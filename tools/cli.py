@@ -57,6 +57,8 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
     from sandmod.loading import load_world
     from sandmod.render import render as run
 
+    from sandmod import kernelcache
+
     loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
     settings = loaded.spec.render
     if output is None:
@@ -66,6 +68,8 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
         known = ", ".join(sorted(ext for r in loaded.registry.recorders.values() for ext in r.value.extensions))
         raise ProblemsError([Problem(display_path(output), None, "", f"no recorder writes '{output.suffix}' files (known: {known})")])
     frames = frames or settings.frames
+    if not kernelcache.is_compiled() and not quiet:
+        click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
     started = time.perf_counter()
     options = dict(frames=frames, every=every or settings.every, scale=scale or settings.scale, fps=fps or settings.fps)
     try:
@@ -76,6 +80,7 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
                 result = run(loaded.world, recorder, output, progress=bar.update, **options)
     except OSError as exc:
         raise ProblemsError([Problem(display_path(output), None, "", f"cannot write: {exc.strerror or exc}")]) from None
+    kernelcache.mark_compiled()
     if not quiet:
         size = output.stat().st_size
         click.echo(
@@ -185,6 +190,55 @@ def validate(paths, mod_dirs) -> None:
         f"ok: {len(ruleset.mods)} mods ({len(ruleset.elements)} elements, {len(ruleset.reactions)} reactions), "
         f"{len(worlds)} worlds"
     )
+
+
+@cli.command()
+@click.option("--scene", "scenes", multiple=True, default=["mix"], show_default=True,
+              type=click.Choice(["mix", "halves", "everything", "settled", "patch"]), help="Scene to run (repeatable).")
+@click.option("--size", type=click.IntRange(256, 2048), default=512, show_default=True, help="World width and height in cells.")
+@click.option("--steps", type=click.IntRange(1, 100000), default=1000, show_default=True, help="Steps to time.")
+@click.option("--threads", "thread_counts", multiple=True, type=click.IntRange(1, 256), help="Threads (repeatable; default: all CPUs).")
+@click.option("--no-sleep", is_flag=True, help="Update every chunk every step, as if none could sleep.")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True, help="World seed.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object per run.")
+def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
+    """Time the kernel on a built-in scene: steps/s, million cell-updates/s, chunks awake, memory.
+
+    \b
+    Scenes (y = 0 is the top row; edges are closed):
+      mix         a quarter sand, a quarter water, scattered by a fixed hash
+      halves      the top half sand, the bottom half water
+      everything  twelve elements: reactions, lifetimes, heat, fire, blasts
+      settled     layers of sand and water at rest (compare with --no-sleep)
+      patch       mix in a 512x512 square in the middle, the rest empty
+    """
+    import os
+
+    from sandmod import benchmark, kernelcache
+
+    thread_counts = thread_counts or (benchmark.max_threads(),)
+    if max(thread_counts) > benchmark.max_threads():
+        os.environ["NUMBA_NUM_THREADS"] = str(max(thread_counts))  # read when numba is imported, just below
+    from sandmod.loading import load_ruleset
+
+    ruleset = load_ruleset()
+    if not kernelcache.is_compiled():
+        click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
+    compile_seconds = benchmark.warm_up(ruleset)
+    kernelcache.mark_compiled()
+    for scene in scenes:
+        for threads in thread_counts:
+            result = benchmark.run(ruleset, scene, size, steps, threads, sleep=not no_sleep, seed=seed, compile_seconds=compile_seconds)
+            if as_json:
+                click.echo(json.dumps(result.as_dict()))
+                continue
+            click.echo(
+                f"{scene} {size}x{size}, {steps} steps, {threads} thread{'s' * (threads > 1)}"
+                f"{', no sleeping' if no_sleep else ''}: {result.steps_per_second:.1f} steps/s, "
+                f"{result.mcell_updates_per_second:.1f} million cell-updates/s, {result.awake_fraction:.0%} of chunks awake, "
+                f"compile {result.compile_seconds:.1f} s, peak memory {result.peak_memory_mb:.0f} MB, "
+                f"state {result.state_bytes_per_cell:.2f} bytes/cell"
+            )
 
 
 def main() -> None:

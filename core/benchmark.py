@@ -1,0 +1,180 @@
+"""The scenes and the timing loop behind ``sandmod bench``.
+
+Speed is million cell-updates a second: width x height x steps / seconds,
+every cell counted whether its chunk is awake or asleep, so the figures
+compare with other engines' and show what sleeping saves.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import sys
+import time
+from dataclasses import asdict, dataclass
+from typing import Callable
+
+import numpy as np
+
+from .compiler import Ruleset
+from .world import CHUNK, World
+
+#: Elements of the ``everything`` scene and their shares of the cells (the rest is empty).
+EVERYTHING = {
+    "sand": 12,
+    "water": 12,
+    "stone": 8,
+    "lava": 5,
+    "acid": 4,
+    "oil": 4,
+    "wood": 4,
+    "coal": 3,
+    "steam": 3,
+    "ice": 3,
+    "fire": 2,
+    "gunpowder": 1,
+}
+
+
+def scene_hash(width: int, height: int) -> np.ndarray:
+    """The mix scene's per-cell number 0..99 (the formula other engines' figures were measured with)."""
+    y, x = np.mgrid[:height, :width].astype(np.uint64)
+    h = (x * np.uint64(374761393) + y * np.uint64(668265263)) % np.uint64(2**32)
+    h = ((h ^ (h >> np.uint64(13))) * np.uint64(1274126177)) % np.uint64(2**32)
+    return (h % np.uint64(100)).astype(np.int64)
+
+
+def _mix(world: World, ruleset: Ruleset, where: np.ndarray | None = None) -> None:
+    r = scene_hash(world.width, world.height)
+    inside = np.ones(r.shape, bool) if where is None else where
+    world.paint(inside & (r < 25), ruleset.index("sand"))
+    world.paint(inside & (r >= 25) & (r < 50), ruleset.index("water"))
+
+
+def mix(world: World, ruleset: Ruleset) -> None:
+    """A quarter sand, a quarter water, half empty, scattered by a fixed hash."""
+    _mix(world, ruleset)
+
+
+def halves(world: World, ruleset: Ruleset) -> None:
+    """The top half sand, the bottom half water: every cell full, the sand sinks through."""
+    top = np.arange(world.height)[:, None] < world.height // 2
+    world.paint(np.broadcast_to(top, (world.height, world.width)), ruleset.index("sand"))
+    world.paint(np.broadcast_to(~top, (world.height, world.width)), ruleset.index("water"))
+
+
+def patch(world: World, ruleset: Ruleset) -> None:
+    """The mix scene in a 512 x 512 square in the middle, the rest empty: the same work at any size."""
+    y, x = np.mgrid[: world.height, : world.width]
+    y0, x0 = max(0, (world.height - 512) // 2), max(0, (world.width - 512) // 2)
+    _mix(world, ruleset, (y >= y0) & (y < y0 + 512) & (x >= x0) & (x < x0 + 512))
+
+
+def settled(world: World, ruleset: Ruleset) -> None:
+    """A world at rest: full rows of sand under full rows of water under air. Stepped until all sleeps."""
+    rows = np.broadcast_to(np.arange(world.height)[:, None], (world.height, world.width))
+    world.paint(rows >= world.height * 3 // 4, ruleset.index("sand"))
+    world.paint((rows >= world.height // 2) & (rows < world.height * 3 // 4), ruleset.index("water"))
+    for _ in range(100):
+        world.step()
+        if world.awake_fraction == 0:
+            break
+
+
+def everything(world: World, ruleset: Ruleset) -> None:
+    """Twelve elements scattered by the mix hash: reactions, lifetimes, heat, fire, steam, blasts."""
+    r = scene_hash(world.width, world.height)
+    start = 0
+    for name, share in EVERYTHING.items():
+        world.paint((r >= start) & (r < start + share), ruleset.index(name))
+        start += share
+
+
+SCENES: dict[str, Callable[[World, Ruleset], None]] = {
+    "mix": mix,
+    "halves": halves,
+    "everything": everything,
+    "settled": settled,
+    "patch": patch,
+}
+
+
+@dataclass(frozen=True)
+class BenchResult:
+    """One timed run; the JSON that ``sandmod bench --json`` prints."""
+
+    scene: str
+    width: int
+    height: int
+    steps: int
+    threads: int
+    sleep: bool  # chunks at rest skipped (False: every chunk updated every step)
+    seconds: float
+    steps_per_second: float
+    mcell_updates_per_second: float
+    awake_fraction: float  # the mean share of chunks updated a step
+    compile_seconds: float  # the first step of a tiny world: compiling, or loading the cached kernels
+    peak_memory_mb: float  # the process's peak resident memory
+    state_bytes_per_cell: float  # the world's arrays, per-cell and per-chunk, over its cells
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def peak_memory_mb() -> float:
+    """The process's peak resident set size in MiB."""
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / 2**20 if sys.platform == "darwin" else peak / 2**10  # bytes on macOS, KiB elsewhere
+
+
+def state_bytes(world: World) -> int:
+    """Bytes of everything a world keeps between steps: its cells and its chunks' bookkeeping."""
+    return sum(a.nbytes for a in world.state) + world.awake.nbytes + world._woken.nbytes + world._detonations.nbytes
+
+
+def warm_up(ruleset: Ruleset) -> float:
+    """Compile (or load from the cache) the kernels on a tiny world; returns the seconds it took."""
+    started = time.perf_counter()
+    world = World(ruleset, CHUNK, CHUNK)
+    world.paint(np.ones((CHUNK, CHUNK), bool), ruleset.index("sand"))
+    world.step()
+    return time.perf_counter() - started
+
+
+def run(
+    ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, *, sleep: bool = True, seed: int = 0, compile_seconds: float = 0.0
+) -> BenchResult:
+    """Build ``scene`` in a size x size world and time ``steps`` steps on ``threads`` threads."""
+    import numba
+
+    numba.set_num_threads(threads)
+    world = World(ruleset, size, size, seed)
+    SCENES[scene](world, ruleset)
+    awake = 0.0
+    started = time.perf_counter()
+    for _ in range(steps):
+        if not sleep:
+            world.wake()
+        awake += world.awake_fraction
+        world.step()
+    seconds = time.perf_counter() - started
+    return BenchResult(
+        scene=scene,
+        width=size,
+        height=size,
+        steps=steps,
+        threads=threads,
+        sleep=sleep,
+        seconds=round(seconds, 4),
+        steps_per_second=round(steps / seconds, 2),
+        mcell_updates_per_second=round(size * size * steps / seconds / 1e6, 1),
+        awake_fraction=round(awake / steps, 4),
+        compile_seconds=round(compile_seconds, 3),
+        peak_memory_mb=round(peak_memory_mb(), 1),
+        state_bytes_per_cell=round(state_bytes(world) / (size * size), 4),
+    )
+
+
+def max_threads() -> int:
+    """How many threads the kernel may use in this process (``NUMBA_NUM_THREADS``, else the CPUs)."""
+    return int(os.environ.get("NUMBA_NUM_THREADS") or os.cpu_count() or 1)
