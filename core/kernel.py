@@ -624,7 +624,35 @@ def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
 
 
 @njit(cache=True, parallel=True)
-def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations):
+def clear_marks(flags, awake):
+    """Forget last frame's moved and reacted marks, in the awake chunks (no others have any)."""
+    height, width = flags.shape
+    chunks_y, chunks_x = awake.shape
+    for cy in prange(chunks_y):
+        for cx in range(chunks_x):
+            if awake[cy, cx] != 0:
+                for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
+                    for x in range(cx << CHUNK_SHIFT, min((cx + 1) << CHUNK_SHIFT, width)):
+                        flags[y, x] &= KEPT
+
+
+@njit(cache=True, parallel=True)
+def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tiles, count):
+    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one thread per tile at a time."""
+    height, width = s.cells.shape
+    tiles_x = (width + TILE - 1) >> TILE_SHIFT
+    for k in prange(count):
+        tile = tiles[k]
+        x0 = (tile % tiles_x) << TILE_SHIFT
+        y0 = (tile // tiles_x) << TILE_SHIFT
+        x1 = min(x0 + TILE, width)
+        y1 = min(y0 + TILE, height)
+        conduct(s, t, frame, awake, woken, x0, y0, x1, y1)
+        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tile, x0, y0, x1, y1)
+
+
+@njit(cache=True)
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, hands):
     """Advance the world by one frame; returns how many explosives went off (see :func:`take_detonations`).
 
     The world is cut into tiles of 2 x 2 chunks, updated in four passes by
@@ -633,7 +661,8 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations)
     same time on as many threads as there are, with the same result as one
     after another. Within a tile, heat flows first, then the cells move. Only
     chunks that are awake are touched; ``awake`` then holds the chunks to
-    update next frame.
+    update next frame. ``hands``, the number of threads, only decides which
+    thread takes which tile.
     """
     flags = s.flags
     height, width = flags.shape
@@ -642,13 +671,9 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations)
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
     woken[:] = 0
     detonations[:] = 0
-    for cy in prange(chunks_y):  # forget last frame's marks (only awake chunks have any)
-        for cx in range(chunks_x):
-            if awake[cy, cx] != 0:
-                for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
-                    for x in range(cx << CHUNK_SHIFT, min((cx + 1) << CHUNK_SHIFT, width)):
-                        flags[y, x] &= KEPT
+    clear_marks(flags, awake)
     todo = np.empty(tiles_y * tiles_x, np.int64)
+    order = np.empty_like(todo)
     for p in range(4):
         # Alternate which rows of tiles go first, so a falling stream crosses each seam in step.
         py = (p >> 1) ^ (frame & 1) ^ 1
@@ -656,19 +681,23 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations)
         count = 0
         for ty in range(py, tiles_y, 2):
             for tx in range(px, tiles_x, 2):
-                cy0, cx0 = ty * 2, tx * 2
-                cy1, cx1 = min(cy0 + 2, chunks_y), min(cx0 + 2, chunks_x)
-                if awake[cy0:cy1, cx0:cx1].any() or woken[cy0:cy1, cx0:cx1].any():
+                running = False
+                for cy in range(ty * 2, min(ty * 2 + 2, chunks_y)):
+                    for cx in range(tx * 2, min(tx * 2 + 2, chunks_x)):
+                        running = running or awake[cy, cx] != 0 or woken[cy, cx] != 0
+                if running:
                     todo[count] = ty * tiles_x + tx
                     count += 1
-        for k in prange(count):
-            tile = todo[k]
-            x0 = (tile % tiles_x) << TILE_SHIFT
-            y0 = (tile // tiles_x) << TILE_SHIFT
-            x1 = min(x0 + TILE, width)
-            y1 = min(y0 + TILE, height)
-            conduct(s, t, frame, awake, woken, x0, y0, x1, y1)
-            step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tile, x0, y0, x1, y1)
+        if count == 0:
+            continue
+        # prange gives each thread one run of the list: deal the tiles out like cards, so
+        # that each run holds tiles from all over the world, not one crowded band of it.
+        dealt = 0
+        for hand in range(hands):
+            for k in range(hand, count, hands):
+                order[dealt] = todo[k]
+                dealt += 1
+        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, order, count)
     awake[:] = woken
     return detonations.sum()
 

@@ -312,6 +312,8 @@ class World:
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the kernel updates every cell, explosions go off."""
+        from numba import get_num_threads
+
         from .kernel import step, take_detonations
 
         for number, emitter in enumerate(self.emitters):
@@ -333,6 +335,7 @@ class World:
             self.awake,
             self._woken,
             self._detonations,
+            get_num_threads(),
         )
         if went_off:  # top to bottom, left to right, whichever thread found them
             self._explode(take_detonations(self.state, self.tables, self._detonations), 0)

@@ -1,0 +1,67 @@
+"""``sandmod bench``, its scenes, and the first-run compile notice."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from click.testing import CliRunner
+
+from sandmod import benchmark, kernelcache
+from sandmod.tools.cli import cli
+from sandmod.world import World
+
+EXAMPLES = Path(__file__).parent.parent / "examples"
+KEYS = {
+    "scene", "width", "height", "steps", "threads", "seconds", "steps_per_second", "mcell_updates_per_second",
+    "awake_fraction", "compile_seconds", "peak_memory_mb",
+}  # fmt: skip
+
+
+def test_mix_scene_is_the_published_one(ruleset):
+    world = World(ruleset, 512, 512)
+    benchmark.mix(world, ruleset)
+    counts = world.counts()
+    assert (counts["sand:sand"], counts["water:water"]) == (65328, 65737)
+
+
+def test_bench_json_prints_one_object_per_run():
+    args = ["bench", "--scene", "settled", "--scene", "mix", "--size", "256", "--steps", "3", "--threads", "1", "--json"]
+    result = CliRunner().invoke(cli, args, catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    runs = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [r["scene"] for r in runs] == ["settled", "mix"]
+    for r in runs:
+        assert KEYS <= set(r) and (r["width"], r["height"], r["steps"], r["threads"]) == (256, 256, 3, 1)
+        assert r["mcell_updates_per_second"] > 0 and r["peak_memory_mb"] > 0
+        assert r["state_bytes_per_cell"] < 16.01
+    assert runs[0]["awake_fraction"] == 0.0 and runs[1]["awake_fraction"] > 0.5
+
+
+def test_bench_rejects_sizes_out_of_range():
+    result = CliRunner().invoke(cli, ["bench", "--size", "100"])
+    assert result.exit_code == 2 and "256<=x<=2048" in result.output
+
+
+def test_no_sleep_updates_every_chunk(ruleset):
+    kept = benchmark.run(ruleset, "settled", 256, 2, 1, sleep=False)
+    assert kept.awake_fraction == 1.0 and not kept.sleep
+
+
+def test_the_first_render_of_a_version_says_it_compiles(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # an empty cache: as on a first run
+    monkeypatch.chdir(tmp_path)
+    assert not kernelcache.is_compiled()
+    args = ["render", str(EXAMPLES / "hourglass.toml"), "--frames", "2", "-o", "a.gif"]
+    first = CliRunner().invoke(cli, args, catch_exceptions=False)
+    assert first.exit_code == 0 and "compiling" in first.stderr
+    assert kernelcache.is_compiled()
+    again = CliRunner().invoke(cli, args, catch_exceptions=False)
+    assert again.exit_code == 0 and "compiling" not in again.stderr
+
+
+def test_state_is_sixteen_bytes_a_cell(ruleset):
+    world = World(ruleset, 512, 512)
+    assert sum(a.nbytes for a in world.state) == 16 * 512 * 512
+    assert np.isclose(benchmark.state_bytes(world) / 512**2, 16, atol=0.01)
