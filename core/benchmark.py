@@ -63,11 +63,20 @@ def halves(world: World, ruleset: Ruleset) -> None:
     world.paint(np.broadcast_to(~top, (world.height, world.width)), ruleset.index("water"))
 
 
+PATCH = 512  # the side of the patch scene's busy square
+
+
 def patch(world: World, ruleset: Ruleset) -> None:
-    """The mix scene in a 512 x 512 square in the middle, the rest empty: the same work at any size."""
+    """The mix scene in a 512 x 512 box of stone in the middle, the rest empty: the same work at any size.
+
+    In a 512 x 512 world the world's edges are the box.
+    """
     y, x = np.mgrid[: world.height, : world.width]
-    y0, x0 = max(0, (world.height - 512) // 2), max(0, (world.width - 512) // 2)
-    _mix(world, ruleset, (y >= y0) & (y < y0 + 512) & (x >= x0) & (x < x0 + 512))
+    y0, x0 = (world.height - PATCH) // 2, (world.width - PATCH) // 2
+    inside = (y >= y0) & (y < y0 + PATCH) & (x >= x0) & (x < x0 + PATCH)
+    _mix(world, ruleset, inside)
+    frame = (y >= y0 - 1) & (y <= y0 + PATCH) & (x >= x0 - 1) & (x <= x0 + PATCH) & ~inside
+    world.paint(frame, ruleset.index("stone"))
 
 
 def settled(world: World, ruleset: Ruleset) -> None:

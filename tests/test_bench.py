@@ -65,3 +65,14 @@ def test_state_is_sixteen_bytes_a_cell(ruleset):
     world = World(ruleset, 512, 512)
     assert sum(a.nbytes for a in world.state) == 16 * 512 * 512
     assert np.isclose(benchmark.state_bytes(world) / 512**2, 16, atol=0.01)
+
+
+def test_patch_scene_keeps_its_work_in_its_box(ruleset):
+    world = World(ruleset, 768, 768)
+    benchmark.patch(world, ruleset)
+    for _ in range(10):
+        world.step()
+    box = np.zeros(world.cells.shape, bool)
+    box[127:641, 127:641] = True
+    assert not world.cells[~box].any()
+    assert world.awake_fraction < 0.6

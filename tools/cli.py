@@ -210,7 +210,7 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
       halves      the top half sand, the bottom half water
       everything  twelve elements: reactions, lifetimes, heat, fire, blasts
       settled     layers of sand and water at rest (compare with --no-sleep)
-      patch       mix in a 512x512 square in the middle, the rest empty
+      patch       mix in a 512x512 stone box in the middle, the rest empty
     """
     import os
 
@@ -219,8 +219,12 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
     thread_counts = thread_counts or (benchmark.max_threads(),)
     if max(thread_counts) > benchmark.max_threads():
         os.environ["NUMBA_NUM_THREADS"] = str(max(thread_counts))  # read when numba is imported, just below
+    import numba
+
     from sandmod.loading import load_ruleset
 
+    if max(thread_counts) > numba.config.NUMBA_NUM_THREADS:  # numba was imported before us, with fewer
+        raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
     ruleset = load_ruleset()
     if not kernelcache.is_compiled():
         click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
