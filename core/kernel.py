@@ -5,12 +5,14 @@ The kernel reads only what it is given: the world's arrays (a
 and per-frame hash keys. Adding or editing a mod changes the tables' contents,
 never the compiled code.
 
-Order within a frame: rows bottom-up; the horizontal direction alternates
-with the row and the frame. A cell is updated once: its lifetime ticks, it
-may react with a touching neighbour, and then it moves by its archetype.
-A cell that moved or changed this frame is marked and left alone for the rest
-of the frame. :func:`step_region` updates one rectangle, so the world can be
-stepped chunk by chunk.
+Order within a frame: tiles of 64 x 64 cells in four passes by their
+parity, the tiles of a pass in parallel (:func:`step`); within a tile, heat
+first (:func:`conduct`), then rows bottom-up, the horizontal direction
+alternating with the row and the frame (:func:`step_region`). Only awake
+chunks (32 x 32) are touched. A cell is updated once: its lifetime ticks, it
+may react with a touching neighbour, and then it moves by its archetype. A
+cell that moved or changed this frame is marked and left alone for the rest
+of the frame.
 
 Movement. Movers (powders, liquids, gases) carry a velocity in 1/256ths of a
 cell per frame. While the cell below (above, for rising gases) is open they
