@@ -144,9 +144,13 @@ class Ruleset:
     def shades(self) -> int:
         return self.looks.shades
 
-    def index(self, ref: str) -> int:
-        """The numeric id of ``ref`` ('sand' or 'sand:sand'); KeyError with a message if unknown."""
-        found, message = _resolve(ref, None, self._ids)
+    def index(self, ref: str, within: str | None = None, near: Sequence[str] = ()) -> int:
+        """The numeric id of ``ref`` ('sand' or 'sand:sand'); KeyError with a message if unknown.
+
+        With ``within`` (a mod's name), a bare name is looked up as that mod's
+        own files would: its own elements first, then those of the mods in ``near``.
+        """
+        found, message = _resolve(ref, within, self._ids, near)
         if found is None:
             raise KeyError(message)
         return self._ids[found]

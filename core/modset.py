@@ -102,7 +102,20 @@ def _find_cycle(mods: dict[str, LoadedMod]) -> list[str]:
 
 
 def find_mods(registry: Registry, extra_dirs: Iterable[Path] = (), extra_files: Iterable[Path] = ()) -> ModSet:
-    """Read and validate every mod the registry, ``extra_dirs`` and ``extra_files`` provide."""
+    """Read and validate every mod the registry, ``extra_dirs`` and ``extra_files`` provide.
+
+    Raises :class:`ProblemsError` naming every mistake in every file.
+    """
+    modset, problems = discover_mods(registry, extra_dirs, extra_files)
+    if problems:
+        raise ProblemsError(problems)
+    return modset
+
+
+def discover_mods(
+    registry: Registry, extra_dirs: Iterable[Path] = (), extra_files: Iterable[Path] = ()
+) -> tuple[ModSet, list[Problem]]:
+    """:func:`find_mods` that keeps going: the mods that are valid, and the problems of the rest."""
     problems: list[Problem] = []
     loaded: list[LoadedMod] = []
 
@@ -142,6 +155,4 @@ def find_mods(registry: Registry, extra_dirs: Iterable[Path] = (), extra_files: 
             )
             continue
         by_name[mod.name] = mod
-    if problems:
-        raise ProblemsError(problems)
-    return ModSet(by_name)
+    return ModSet(by_name), problems

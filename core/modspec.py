@@ -27,6 +27,7 @@ parameters. Element names, tags and mod names are lower-case identifiers.
 
 from __future__ import annotations
 
+import textwrap
 from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
@@ -382,6 +383,122 @@ class Reaction(_Strict):
         return self
 
 
+TEST_NAME = r"[a-z0-9][a-z0-9_-]*"
+#: What a test's legend maps '.' to unless it says otherwise.
+DEFAULT_LEGEND = {".": "empty"}
+#: The character that matches any cell in an expected grid, unless a test picks another.
+DEFAULT_WILDCARD = "?"
+
+
+class Placed(_Strict):
+    """A legend entry that also sets the temperature of the cells it paints."""
+
+    element: ElementName = Field(description="The element painted where the character is.")
+    temperature: Temperature = Field(description="Their temperature, in degrees Celsius.")
+
+
+class Bounds(_Strict):
+    """A closed range; either end may be left out."""
+
+    min: float | None = Field(None, description="Lowest allowed value.")
+    max: float | None = Field(None, description="Highest allowed value.")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Bounds":
+        if self.min is None and self.max is None:
+            raise ValueError("give min, max or both")
+        if self.min is not None and self.max is not None and self.min > self.max:
+            raise ValueError("min must not be above max")
+        return self
+
+
+Count = Annotated[
+    Union[Annotated[int, Field(ge=0)], Annotated[list[Annotated[int, Field(ge=0)]], Field(min_length=2, max_length=2)]],
+    Field(description="An exact number of cells, or [fewest, most]."),
+]
+
+
+class ModTest(_Strict):
+    """An interaction test: a small scene drawn as text, run for some frames, then checked.
+
+    ``scene`` has one character per cell and one line per row (leading and
+    trailing blank lines and the common indentation are ignored); ``legend``
+    says which element each character is ('.' is empty unless you say
+    otherwise). The world's edges are closed. Every expectation given must
+    hold after ``frames`` frames.
+    """
+
+    name: str = Field(pattern=rf"^{TEST_NAME}$", description="Short name, unique in the mod (lower case, digits, _ and -).")
+    description: str = Field("", max_length=2000, description="What the test shows.")
+    mods: list[ModName] = Field(
+        default_factory=list,
+        description="Other mods to load for this test, besides this one and what it requires (e.g. 'water' to sink sand in).",
+    )
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice.")
+    frames: int = Field(ge=0, le=100000, description="Frames to run before checking.")
+    legend: dict[str, ElementName | Placed] = Field(
+        default_factory=dict,
+        description="One character -> an element, or {element, temperature}. '.' is 'empty' unless given.",
+    )
+    scene: str = Field(description="The starting cells: one line per row, one legend character per cell.")
+    expect: str | None = Field(
+        None, description="The exact cells after 'frames' frames, drawn like 'scene'; the wildcard matches any cell."
+    )
+    wildcard: str = Field(DEFAULT_WILDCARD, min_length=1, max_length=1, description="The character in 'expect' that matches any cell.")
+    count: dict[ElementName, Count] = Field(
+        default_factory=dict,
+        description="Cells of an element at the end: an exact number or [fewest, most]; flying particles count as what they carry.",
+    )
+    present: list[ElementName] = Field(default_factory=list, description="Elements that must be somewhere at the end.")
+    absent: list[ElementName] = Field(default_factory=list, description="Elements that must be nowhere at the end.")
+    temperature: dict[ElementName, Bounds] = Field(
+        default_factory=dict, description="Bounds in degrees Celsius that every cell of an element must be within at the end."
+    )
+
+    @field_validator("legend")
+    @classmethod
+    def _single_characters(cls, value: dict) -> dict:
+        for char in value:
+            if len(char) != 1 or char.isspace():
+                raise ValueError(f"legend keys are single, visible characters (got {char!r})")
+        return value
+
+    @model_validator(mode="after")
+    def _grids_fit(self) -> "ModTest":
+        legend = self.full_legend()
+        if self.wildcard in legend:
+            raise ValueError(f"the wildcard {self.wildcard!r} is also in the legend; pick another with wildcard = \"...\"")
+        rows = self.rows("scene")
+        if not rows:
+            raise ValueError("scene: draw at least one row")
+        _check_grid("scene", rows, set(legend), len(rows[0]), len(rows))
+        if self.expect is not None:
+            _check_grid("expect", self.rows("expect"), set(legend) | {self.wildcard}, len(rows[0]), len(rows))
+        if not (self.expect is not None or self.count or self.present or self.absent or self.temperature):
+            raise ValueError("a test needs at least one of expect, count, present, absent, temperature")
+        return self
+
+    def full_legend(self) -> dict[str, "str | Placed"]:
+        """The legend with the defaults filled in."""
+        return {**DEFAULT_LEGEND, **self.legend}
+
+    def rows(self, which: str) -> list[str]:
+        """``scene`` or ``expect`` as rows of characters."""
+        text = textwrap.dedent(getattr(self, which) or "").strip("\n")
+        return [line.rstrip() for line in text.splitlines()] if text.strip() else []
+
+
+def _check_grid(name: str, rows: list[str], allowed: set[str], width: int, height: int) -> None:
+    if len(rows) != height:
+        raise ValueError(f"{name} has {len(rows)} rows; the scene has {height}")
+    for number, row in enumerate(rows, start=1):
+        if len(row) != width:
+            raise ValueError(f"{name} row {number} has {len(row)} cells; the first row of the scene has {width}")
+        unknown = sorted(set(row) - allowed)
+        if unknown:
+            raise ValueError(f"{name} row {number}: {', '.join(map(repr, unknown))} not in the legend")
+
+
 class ModFile(_Strict):
     """A whole mod file."""
 
@@ -391,6 +508,16 @@ class ModFile(_Strict):
         description="The elements this mod defines, by name ('NAME' or 'othermod:NAME' to override).",
     )
     reactions: list[Reaction] = Field(default_factory=list, description="Reactions between touching cells.")
+    tests: list[ModTest] = Field(default_factory=list, description="Interaction tests, run by 'sandmod test' and pytest.")
+
+    @field_validator("tests")
+    @classmethod
+    def _unique_test_names(cls, tests: list[ModTest]) -> list[ModTest]:
+        names = [t.name for t in tests]
+        doubled = sorted({n for n in names if names.count(n) > 1})
+        if doubled:
+            raise ValueError(f"test names must be unique in a mod: {', '.join(doubled)}")
+        return tests
 
 
 PATTERN_HINTS.update(
@@ -400,5 +527,6 @@ PATTERN_HINTS.update(
         f"^{NAME}$": "must be a lower-case name like 'acid_proof'",
         f"^{SELECTOR}$": "must be an element ('water'), a tag ('#metal'), '*', or one of those after '!'",
         r"^#[0-9a-fA-F]{6}$": "must be a colour like '#c2b280'",
+        f"^{TEST_NAME}$": "must be a short name like 'sinks_in_water' (lower case, digits, _ and -)",
     }
 )

@@ -104,6 +104,7 @@ class TomlSource:
     text: str
     data: dict[str, Any]
     lines: dict[Loc, int] = field(default_factory=dict)
+    path: Path | None = None  # the file it was read from, if any
 
     @classmethod
     def read(cls, path: str | Path) -> "TomlSource":
@@ -115,7 +116,9 @@ class TomlSource:
             raise ProblemsError([Problem(name, None, "", f"cannot read file: {exc.strerror or exc}")])
         except UnicodeDecodeError:
             raise ProblemsError([Problem(name, None, "", "file is not UTF-8 text")])
-        return cls.parse(text, name)
+        source = cls.parse(text, name)
+        source.path = Path(path).resolve()
+        return source
 
     @classmethod
     def parse(cls, text: str, name: str) -> "TomlSource":

@@ -192,6 +192,58 @@ def validate(paths, mod_dirs) -> None:
     )
 
 
+@cli.command("test")
+@click.argument("mods", nargs=-1)
+@_mods_option
+def test_(mods, mod_dirs) -> None:
+    """Run the interaction tests ([[tests]]) of the named mods, or of every mod found.
+
+    Mods are looked for where 'sandmod validate' looks: the bundled ones,
+    plugins' folders, ./mods and every --mods DIR. Exit status: 0 when every
+    test passed, 1 when one failed, 2 when a file has a mistake.
+    """
+    from sandmod import kernelcache
+    from sandmod.loading import load_registry
+    from sandmod.modset import discover_mods
+    from sandmod.modtests import TestRunner
+
+    folders = ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
+    modset, problems = discover_mods(load_registry(), folders)
+    runner = TestRunner(modset)
+    try:
+        cases = runner.cases(mods or None)
+    except ProblemsError as exc:
+        raise ProblemsError(problems + exc.problems) from None
+    if not cases:
+        click.echo("no tests found" + (f" in mods {', '.join(mods)}" if mods else ""))
+    elif not kernelcache.is_compiled():
+        click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
+    started, failed, errors = time.perf_counter(), 0, 0
+    for case in cases:
+        try:
+            outcome = runner.run(case)
+        except ProblemsError as exc:
+            problems.extend(exc.problems)
+            errors += 1
+            click.echo(f"{case.id} ... ERROR (see below)")
+            continue
+        kernelcache.mark_compiled()
+        click.echo(f"{case.id} ... {'ok' if outcome.passed else 'FAILED'}")
+        if not outcome.passed:
+            failed += 1
+            click.echo(outcome.report())
+    if cases:
+        passed = len(cases) - failed - errors
+        click.echo(
+            f"{passed} passed, {failed} failed" + (f", {errors} could not run" if errors else "")
+            + f" in {time.perf_counter() - started:.1f} s"
+        )
+    if problems:
+        raise ProblemsError(problems)
+    if failed:
+        sys.exit(1)
+
+
 @cli.command()
 @click.option("--scene", "scenes", multiple=True, default=["mix"], show_default=True,
               type=click.Choice(["mix", "halves", "everything", "settled", "patch"]), help="Scene to run (repeatable).")
