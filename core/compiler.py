@@ -212,6 +212,11 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
     reactions = _compile_reactions(mods, elements, t, resolve, problems)
+
+    def resolve_id(ref: str, d: _Definition) -> str | None:
+        return _resolve(ref, d.mod, ids, by_mod[d.mod].requires)[0]
+
+    problems.extend(_endless_phase_changes(defs, resolve_id))
     if problems:
         raise ProblemsError(problems)
     palette, looks = _palette(elements)
@@ -507,7 +512,58 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[Co
         t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
         t.react_tsum_min[pair], t.react_tsum_max[pair], t.react_heat[pair] = low, high, heat
     t.reactive[:] = (t.react_chance > 0).any(axis=1)
+    problems.extend(_endless_reactions(winner, elements))
     return tuple(compiled)
+
+
+def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Problem]:
+    """Touching pairs that react into a pair that reacts back, at any temperature: they never settle."""
+    always = {
+        pair: (first, second)
+        for pair, (_, _, _, (first, second, _, low, high, _)) in winner.items()
+        if low == -(2**31) and high == 2**31 - 1 and (first, second) != pair
+    }
+    problems: list[Problem] = []
+    reported: set = set()
+    for start in sorted(always):
+        path, pair = [start], always[start]
+        while pair in always and pair not in path and (pair[1], pair[0]) not in path:
+            path.append(pair)
+            pair = always[pair]
+        if (pair in path or (pair[1], pair[0]) in path) and not reported & set(path):
+            reported.update(path)
+            reported.update((b, a) for a, b in path)  # the same contacts, seen from the other cell
+            _, mod, number, _ = winner[start]
+            steps = " -> ".join(f"{elements[a].name} + {elements[b].name}" for a, b in [*path, pair])
+            problems.append(
+                mod.source.problem(
+                    ("reactions", number),
+                    f"these reactions never settle: {steps}; touching cells would change forever "
+                    "(give one of them a temperature range, or end the chain)",
+                )
+            )
+    return problems
+
+
+def _endless_phase_changes(defs: dict[str, "_Definition"], resolve_id) -> list[Problem]:
+    """An element that turns into another when heated, which turns back when cooled, above the first's limit."""
+    problems: list[Problem] = []
+    for element_id, d in defs.items():
+        heated = d.spec.heated
+        other = defs.get(resolve_id(heated.becomes, d) or "") if heated is not None else None
+        if other is None or other.spec.cooled is None or resolve_id(other.spec.cooled.becomes, other) != element_id:
+            continue
+        if other.spec.cooled.below > heated.above:
+            name, other_name = element_id.split(":")[1], heated.becomes
+            problems.append(
+                d.source.problem(
+                    d.loc + ("heated", "above"),
+                    f"{name} turns into {other_name} above {heated.above:g} degrees, but {other_name} turns back "
+                    f"below {other.spec.cooled.below:g}: between the two it would change every frame; "
+                    f"make {other_name}'s cooled.below at most {heated.above:g}",
+                )
+            )
+    return problems
 
 
 def _hex_rgb(color: str) -> tuple[int, int, int]:

@@ -1,4 +1,4 @@
-"""User-facing problems: one line each, ``file:line: field.path: message``.
+"""User-facing problems: one line each, ``file:line:column: field.path: message``.
 
 Every mistake in a mod or world file becomes a :class:`Problem`. Loaders
 collect as many as they can find and raise them together in a
@@ -20,9 +20,12 @@ class Problem:
     line: int | None
     path: str
     message: str
+    column: int | None = None
 
     def __str__(self) -> str:
         where = self.file if self.line is None else f"{self.file}:{self.line}"
+        if self.line is not None and self.column is not None:
+            where += f":{self.column}"
         return f"{where}: {self.path}: {self.message}" if self.path else f"{where}: {self.message}"
 
 

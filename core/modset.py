@@ -46,6 +46,19 @@ class ModSet:
     """Every mod that was found, by name."""
 
     mods: dict[str, LoadedMod]
+    broken: frozenset[str] = frozenset()  # names of mods that were found but have mistakes
+
+    def usable(self) -> list[str]:
+        """The mods whose requirements, all the way down, were found without mistakes."""
+        ok: dict[str, bool] = {}
+
+        def check(name: str, seen: tuple[str, ...]) -> bool:
+            if name not in ok:
+                mod = self.mods.get(name)
+                ok[name] = mod is not None and all(r in seen or check(r, seen + (r,)) for r in mod.requires)
+            return ok[name]
+
+        return [name for name in self.mods if check(name, (name,))]
 
     def select(self, names: Sequence[str] | None = None) -> list[LoadedMod]:
         """The named mods (all when ``None``), what they require, and ``base``, in load order."""
@@ -61,6 +74,8 @@ class ModSet:
             for i, need in enumerate(mod.spec.mod.requires):
                 if need in self.mods:
                     stack.append(need)
+                elif need in self.broken:
+                    problems.append(mod.source.problem(("mod", "requires", i), f"requires mod '{need}', which has mistakes"))
                 else:
                     problems.append(
                         mod.source.problem(("mod", "requires", i), f"requires mod '{need}', which was not found")
@@ -119,11 +134,16 @@ def discover_mods(
     problems: list[Problem] = []
     loaded: list[LoadedMod] = []
 
+    broken: set[str] = set()
+
     def add(source: TomlSource, plugin: str) -> None:
         try:
             loaded.append(LoadedMod(validate(ModFile, source), source, plugin))
         except ProblemsError as exc:
             problems.extend(exc.problems)
+            name = source.data.get("mod", {}).get("name") if isinstance(source.data.get("mod"), dict) else None
+            if isinstance(name, str):
+                broken.add(name)
 
     folders = [(entry.value, entry.plugin) for entry in registry.mod_dirs]
     for folder in extra_dirs:
@@ -155,4 +175,4 @@ def discover_mods(
             )
             continue
         by_name[mod.name] = mod
-    return ModSet(by_name), problems
+    return ModSet(by_name, frozenset(broken - set(by_name))), problems

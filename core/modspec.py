@@ -31,6 +31,7 @@ import textwrap
 from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from .validation import PATTERN_HINTS
 
@@ -470,7 +471,7 @@ class ModTest(_Strict):
             raise ValueError(f"the wildcard {self.wildcard!r} is also in the legend; pick another with wildcard = \"...\"")
         rows = self.rows("scene")
         if not rows:
-            raise ValueError("scene: draw at least one row")
+            raise PydanticCustomError("grid", "draw at least one row", {"field": "scene", "row": None})
         _check_grid("scene", rows, set(legend), len(rows[0]), len(rows))
         if self.expect is not None:
             _check_grid("expect", self.rows("expect"), set(legend) | {self.wildcard}, len(rows[0]), len(rows))
@@ -489,14 +490,17 @@ class ModTest(_Strict):
 
 
 def _check_grid(name: str, rows: list[str], allowed: set[str], width: int, height: int) -> None:
+    def wrong(message: str, row: int | None = None) -> PydanticCustomError:
+        return PydanticCustomError("grid", "{message}", {"message": message, "field": name, "row": row})
+
     if len(rows) != height:
-        raise ValueError(f"{name} has {len(rows)} rows; the scene has {height}")
+        raise wrong(f"{len(rows)} rows; the scene has {height}")
     for number, row in enumerate(rows, start=1):
         if len(row) != width:
-            raise ValueError(f"{name} row {number} has {len(row)} cells; the first row of the scene has {width}")
+            raise wrong(f"row {number} has {len(row)} cells; the scene's first row has {width}", number)
         unknown = sorted(set(row) - allowed)
         if unknown:
-            raise ValueError(f"{name} row {number}: {', '.join(map(repr, unknown))} not in the legend")
+            raise wrong(f"row {number}: {', '.join(map(repr, unknown))} not in the legend", number)
 
 
 class ModFile(_Strict):

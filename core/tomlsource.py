@@ -52,9 +52,12 @@ def _parse_key(text: str, pos: int) -> tuple[list[str], int] | None:
         return parts, pos
 
 
-def index_lines(text: str) -> dict[Loc, int]:
-    """Map each table header and key path in ``text`` to its 1-based line."""
-    lines: dict[Loc, int] = {}
+def index_positions(text: str) -> dict[Loc, tuple[int, int]]:
+    """Map each table header and key path in ``text`` to its 1-based (line, column).
+
+    Keys inside inline tables (``heated = { above = 100 }``) are indexed too.
+    """
+    positions: dict[Loc, tuple[int, int]] = {}
     array_counts: dict[tuple[str, ...], int] = {}
     table: Loc = ()
     in_multiline = False
@@ -65,6 +68,7 @@ def index_lines(text: str) -> dict[Loc, int]:
             continue
         in_multiline = bool(toggles)
         stripped = raw.strip()
+        column = len(raw) - len(raw.lstrip()) + 1
         if stripped.startswith("["):
             is_array = stripped.startswith("[[")
             parsed = _parse_key(stripped, 2 if is_array else 1)
@@ -85,15 +89,79 @@ def index_lines(text: str) -> dict[Loc, int]:
                     resolved.append(array_counts[prefix])
             table = tuple(resolved)
             for end in range(1, len(table) + 1):  # [a.b] also opens a
-                lines.setdefault(table[:end], number)
+                positions.setdefault(table[:end], (number, column))
             continue
         parsed = _parse_key(raw, 0)
         if parsed is None:
             continue
         keys, end = parsed
         if end < len(raw) and raw[end] == "=":
-            lines.setdefault(table + tuple(keys), number)
-    return lines
+            loc = table + tuple(keys)
+            positions.setdefault(loc, (number, column))
+            value = _skip_blanks(raw, end + 1)
+            if value < len(raw) and raw[value] == "{":
+                _index_inline_table(raw, value, loc, number, positions)
+    return positions
+
+
+def index_lines(text: str) -> dict[Loc, int]:
+    """Map each table header and key path in ``text`` to its 1-based line."""
+    return {loc: line for loc, (line, _) in index_positions(text).items()}
+
+
+def _skip_blanks(text: str, pos: int) -> int:
+    while pos < len(text) and text[pos] in " \t":
+        pos += 1
+    return pos
+
+
+def _index_inline_table(raw: str, pos: int, prefix: Loc, number: int, positions: dict) -> int:
+    """Index the keys of the inline table opening at ``raw[pos]``; return the position after it."""
+    pos += 1
+    while pos < len(raw):
+        pos = _skip_blanks(raw, pos)
+        if pos < len(raw) and raw[pos] == ",":
+            pos += 1
+            continue
+        if pos >= len(raw) or raw[pos] == "}":
+            return pos + 1
+        parsed = _parse_key(raw, pos)
+        if parsed is None:
+            return len(raw)
+        keys, end = parsed
+        if end >= len(raw) or raw[end] != "=":
+            return len(raw)
+        loc = prefix + tuple(keys)
+        positions.setdefault(loc, (number, pos + 1))
+        pos = _skip_blanks(raw, end + 1)
+        if pos < len(raw) and raw[pos] == "{":
+            pos = _index_inline_table(raw, pos, loc, number, positions)
+        else:
+            pos = _skip_value(raw, pos)
+    return pos
+
+
+def _skip_value(raw: str, pos: int) -> int:
+    """The position of the ',' or '}' that ends the value starting at ``pos``."""
+    depth = 0
+    while pos < len(raw):
+        char = raw[pos]
+        if char in "\"'":
+            end = pos + 1
+            while end < len(raw) and raw[end] != char:
+                end += 2 if char == '"' and raw[end] == "\\" else 1
+            pos = end + 1
+            continue
+        if char in "[{":
+            depth += 1
+        elif char in "]}":
+            if depth == 0:
+                return pos
+            depth -= 1
+        elif char == "," and depth == 0:
+            return pos
+        pos += 1
+    return pos
 
 
 @dataclass
@@ -103,7 +171,7 @@ class TomlSource:
     name: str
     text: str
     data: dict[str, Any]
-    lines: dict[Loc, int] = field(default_factory=dict)
+    positions: dict[Loc, tuple[int, int]] = field(default_factory=dict)  # key path -> (line, column)
     path: Path | None = None  # the file it was read from, if any
 
     @classmethod
@@ -127,20 +195,48 @@ class TomlSource:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise ProblemsError([_decode_problem(name, text, exc)])
-        return cls(name, text, data, index_lines(text))
+        return cls(name, text, data, index_positions(text))
+
+    def position_of(self, loc: Sequence[str | int]) -> tuple[int, int] | None:
+        """(line, column) of the longest prefix of ``loc`` that is written in the file."""
+        loc = tuple(loc)
+        for end in range(len(loc), 0, -1):
+            found = self.positions.get(loc[:end])
+            if found is not None:
+                return found
+        return None
 
     def line_of(self, loc: Sequence[str | int]) -> int | None:
         """The line of the longest prefix of ``loc`` that is written in the file."""
-        loc = tuple(loc)
-        for end in range(len(loc), 0, -1):
-            line = self.lines.get(loc[:end])
-            if line is not None:
-                return line
-        return None
+        found = self.position_of(loc)
+        return None if found is None else found[0]
 
-    def problem(self, loc: Sequence[str | int], message: str) -> Problem:
-        """A problem at field path ``loc`` of this file."""
-        return Problem(self.name, self.line_of(loc), format_loc(loc), message)
+    def problem(self, loc: Sequence[str | int], message: str, *, row: int | None = None) -> Problem:
+        """A problem at field path ``loc`` of this file.
+
+        ``row`` (1-based) points into a multi-line string value at ``loc``: the
+        problem is then on that row's line.
+        """
+        found = self.position_of(loc)
+        if found is None:
+            return Problem(self.name, None, format_loc(loc), message)
+        line, column = found
+        if row is not None and self.positions.get(tuple(loc)) == found:
+            line, column = self._row_position(line, loc, row)
+        return Problem(self.name, line, format_loc(loc), message, column)
+
+    def _row_position(self, line: int, loc: Sequence[str | int], row: int) -> tuple[int, int]:
+        """Where row ``row`` of the (dedented, blank-trimmed) multi-line string at ``loc`` is."""
+        text_lines = self.text.splitlines()
+        starts_below = text_lines[line - 1].rstrip().endswith(('"""', "'''"))
+        value: Any = self.data
+        for part in loc:
+            value = value[part]
+        lines = str(value).splitlines()
+        blank = next((i for i, text in enumerate(lines) if text.strip()), 0)
+        number = line + (1 if starts_below else 0) + blank + row - 1
+        written = text_lines[number - 1] if 0 < number <= len(text_lines) else ""
+        return number, len(written) - len(written.lstrip()) + 1
 
 
 def format_loc(loc: Sequence[str | int]) -> str:
@@ -150,12 +246,12 @@ def format_loc(loc: Sequence[str | int]) -> str:
 
 def _decode_problem(name: str, text: str, exc: tomllib.TOMLDecodeError) -> Problem:
     message = str(exc)
-    line = None
+    line = column = None
     m = _DECODE_POSITION.search(message)
     if m:
-        line = int(m.group(1))
+        line, column = int(m.group(1)), int(m.group(2))
         message = message[: m.start()]
     elif _DECODE_END.search(message):
         line = max(1, text.count("\n") + (0 if text.endswith("\n") else 1))
         message = _DECODE_END.sub("", message)
-    return Problem(name, line, "", f"invalid TOML: {message}")
+    return Problem(name, line, "", f"invalid TOML: {message}", column)

@@ -40,6 +40,8 @@ def _to_problem(model: type[BaseModel], source: TomlSource, err: Any):
     if err["type"] == "union_tag_invalid":
         loc += (err["ctx"]["discriminator"].strip("'"),)
     message = _message(model, source.data, loc, err)
+    if err["type"] == "grid":  # a row of a test's drawn scene: point at that row's line
+        return source.problem(loc + (err["ctx"]["field"],), message, row=err["ctx"].get("row"))
     return source.problem(loc, f"invalid name: {message}" if is_key else message)
 
 

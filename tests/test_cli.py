@@ -119,8 +119,8 @@ def test_bad_world_is_one_line_per_problem_exit_2_and_no_file():
     result = invoke("render", "bad.toml", "-o", "bad.gif")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
-        "bad.toml:4: world.height: must be >= 4 (got 0)",
-        "bad.toml:7: scene.0.shape: must be one of 'rect', 'circle', 'line', 'fill' (got 'blob')",
+        "bad.toml:4:1: world.height: must be >= 4 (got 0)",
+        "bad.toml:7:1: scene.0.shape: must be one of 'rect', 'circle', 'line', 'fill' (got 'blob')",
     ]
     assert "Traceback" not in result.output
     assert not list(Path(".").glob("*.gif*")) and not list(Path(".").glob(".bad.gif*"))
@@ -130,14 +130,14 @@ def test_unknown_elements_in_a_scene_are_named_with_their_line():
     Path("typo.toml").write_text(POURING.format(element="snad"))
     result = invoke("render", "typo.toml")
     assert result.exit_code == 2
-    assert result.stderr.splitlines() == ["typo.toml:17: emitters.0.element: unknown element 'snad' (did you mean 'sand'?)"]
+    assert result.stderr.splitlines() == ["typo.toml:17:1: emitters.0.element: unknown element 'snad' (did you mean 'sand'?)"]
 
 
 def test_unknown_mod_and_output_format():
     Path("w.toml").write_text('[world]\nwidth = 10\nheight = 10\nmods = ["sand", "glitter"]\n')
     result = invoke("render", "w.toml")
     assert result.exit_code == 2
-    assert result.stderr.startswith("w.toml:4: world.mods.1: mod 'glitter' was not found (found: acid, base,")
+    assert result.stderr.startswith("w.toml:4:1: world.mods.1: mod 'glitter' was not found (found: acid, base,")
     Path("w.toml").write_text("[world]\nwidth = 10\nheight = 10\n")
     result = invoke("render", "w.toml", "-o", "w.mp4")
     assert result.exit_code == 2
@@ -192,8 +192,8 @@ def test_validate_accepts_good_files_and_reports_every_bad_one():
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
         "notes.toml:1: neither a mod (no [mod] table) nor a world (no [world] table)",
-        "mods/a.toml:6: elements.x.density: must be > 0 (got -1)",
-        "mods/b.toml:3: elements.y.dispersion: required field is missing",
+        "mods/a.toml:6:1: elements.x.density: must be > 0 (got -1)",
+        "mods/b.toml:3:1: elements.y.dispersion: required field is missing",
     ]
 
 
@@ -282,7 +282,7 @@ def test_a_mod_given_as_a_world_says_so():
     result = invoke("render", "mods/m.toml")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
-        "mods/m.toml:1: mod: this is a mod ([mod]), not a world ([world]); put it in a mods/ folder beside your world"
+        "mods/m.toml:1:1: mod: this is a mod ([mod]), not a world ([world]); put it in a mods/ folder beside your world"
     ]
 
 
@@ -300,7 +300,7 @@ def test_a_shape_outside_the_world_is_an_error():
     )
     result = invoke("validate", "w.toml")
     assert result.exit_code == 2
-    assert result.stderr.splitlines() == ["w.toml:5: scene.0: the shape lies outside the 10x10 world"]
+    assert result.stderr.splitlines() == ["w.toml:5:1: scene.0: the shape lies outside the 10x10 world"]
 
 
 def test_bad_gravity_and_sprays_are_named_with_their_lines():
@@ -328,10 +328,10 @@ def test_bad_gravity_and_sprays_are_named_with_their_lines():
     result = invoke("render", "spray.toml")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
-        "spray.toml:4: world.gravity: must be >= 0 (got -1)",
-        "spray.toml:9: sprays.0.speed: give [slowest, fastest]",
-        "spray.toml:14: sprays.1.speed: must be <= 16 (got 40)",
-        "spray.toml:15: sprays.1.rate: must be > 0 (got 0)",
+        "spray.toml:4:1: world.gravity: must be >= 0 (got -1)",
+        "spray.toml:9:1: sprays.0.speed: give [slowest, fastest]",
+        "spray.toml:14:1: sprays.1.speed: must be <= 16 (got 40)",
+        "spray.toml:15:1: sprays.1.rate: must be > 0 (got 0)",
     ]
 
 
@@ -343,11 +343,11 @@ def test_a_spray_must_start_inside_the_world_and_name_a_known_element():
     result = invoke("render", "spray.toml")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
-        "spray.toml:6: sprays.0.element: unknown element 'watr' (did you mean 'water'?)",
-        "spray.toml:12: sprays.1.at: the start lies outside the 40x30 world",
+        "spray.toml:6:1: sprays.0.element: unknown element 'watr' (did you mean 'water'?)",
+        "spray.toml:12:1: sprays.1.at: the start lies outside the 40x30 world",
     ]
     Path("spray.toml").write_text('[world]\nwidth = 40\nheight = 30\n\n[[sprays]]\nelement = "empty"\nat = [5, 5]\nspeed = 3\n')
-    assert invoke("render", "spray.toml").stderr.splitlines() == ["spray.toml:6: sprays.0.element: spray an element, not 'empty'"]
+    assert invoke("render", "spray.toml").stderr.splitlines() == ["spray.toml:6:1: sprays.0.element: spray an element, not 'empty'"]
 
 
 def test_a_spray_fires_particles_that_land_as_their_element():
@@ -376,9 +376,9 @@ def test_explosions_and_temperatures_in_world_files_are_checked():
     result = invoke("render", "blast.toml")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
-        "blast.toml:12: scene.0.temperature: must be >= -273 (got -300)",
-        "blast.toml:17: explosions.0.radius: must be <= 32 (got 50)",
-        "blast.toml:18: explosions.0.strength: must be > 0 (got -1)",
+        "blast.toml:12:1: scene.0.temperature: must be >= -273 (got -300)",
+        "blast.toml:17:1: explosions.0.radius: must be <= 32 (got 50)",
+        "blast.toml:18:1: explosions.0.strength: must be > 0 (got -1)",
     ]
     Path("blast.toml").write_text(
         '[world]\nwidth = 40\nheight = 30\n\n[[explosions]]\nframe = 3\nat = [50, 15]\nradius = 5\nstrength = 1\n'
@@ -387,7 +387,7 @@ def test_explosions_and_temperatures_in_world_files_are_checked():
     result = invoke("render", "blast.toml")
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
-        "blast.toml:7: explosions.0.at: the centre lies outside the 40x30 world",
-        "blast.toml:17: explosions.1.leaves: unknown element 'smok' (did you mean 'smoke'?)",
+        "blast.toml:7:1: explosions.0.at: the centre lies outside the 40x30 world",
+        "blast.toml:17:1: explosions.1.leaves: unknown element 'smok' (did you mean 'smoke'?)",
     ]
     assert not list(Path(".").glob("blast*.gif"))

@@ -164,7 +164,7 @@ def test_reactions_of_equal_rank_that_disagree_are_an_error(registry, tmp_path):
         },
     )
     assert problems == [
-        "mods/fizz.toml:11: reactions.1: fizz:foam + sand:sand also reacts differently at mods/fizz.toml:5 "
+        "mods/fizz.toml:11:1: reactions.1: fizz:foam + sand:sand also reacts differently at mods/fizz.toml:5 "
         "(reactions.0); make one selector more specific",
     ]
 
@@ -187,7 +187,7 @@ def test_unknown_element_suggests_a_name(registry, tmp_path):
             """
         },
     )
-    assert problems == ["mods/mud.toml:9: elements.mud.lifetime.becomes: unknown element 'snad' (did you mean 'sand'?)"]
+    assert problems == ["mods/mud.toml:9:27: elements.mud.lifetime.becomes: unknown element 'snad' (did you mean 'sand'?)"]
 
 
 def test_naming_another_mods_element_needs_requires(registry, tmp_path):
@@ -208,8 +208,8 @@ def test_naming_another_mods_element_needs_requires(registry, tmp_path):
         },
     )
     assert problems == [
-        "mods/wet.toml:5: reactions.0.a: 'sand:sand' is from mod 'sand'; add 'sand' to mod.requires",
-        "mods/wet.toml:6: reactions.0.b: 'water:water' is from mod 'water'; add 'water' to mod.requires",
+        "mods/wet.toml:5:1: reactions.0.a: 'sand:sand' is from mod 'sand'; add 'sand' to mod.requires",
+        "mods/wet.toml:6:1: reactions.0.b: 'water:water' is from mod 'water'; add 'water' to mod.requires",
     ]
 
 
@@ -240,7 +240,7 @@ def test_ambiguous_bare_names_are_errors(registry, tmp_path):
         },
     )
     assert problems == [
-        "mods/user.toml:8: elements.glass.lifetime.becomes: 'sand' is ambiguous; write one of: beach:sand, sand:sand"
+        "mods/user.toml:8:26: elements.glass.lifetime.becomes: 'sand' is ambiguous; write one of: beach:sand, sand:sand"
     ]
 
 
@@ -259,7 +259,7 @@ def test_redefining_an_element_needs_override(registry, tmp_path):
     }
     problems = problems_of(registry, tmp_path, files)
     assert problems == [
-        f"mods/redsand.toml:5: elements.sand:sand: 'sand:sand' is already defined by "
+        f"mods/redsand.toml:5:1: elements.sand:sand: 'sand:sand' is already defined by "
         f"{_bundled('sand.toml')}; set override = true to replace it"
     ]
     files["redsand.toml"] = files["redsand.toml"].replace("density = 1600", "density = 1600\n            override = true")
@@ -291,18 +291,18 @@ def test_override_of_nothing_is_an_error(registry, tmp_path):
             """
         },
     )
-    assert problems == ["mods/ghost.toml:4: elements.wisp: 'ghost:wisp' is not defined by any loaded mod (nothing to override)"]
+    assert problems == ["mods/ghost.toml:4:1: elements.wisp: 'ghost:wisp' is not defined by any loaded mod (nothing to override)"]
 
 
 def test_missing_required_mod_cycles_and_duplicate_names(registry, tmp_path):
     assert problems_of(registry, tmp_path / "a", {"x.toml": '[mod]\nname = "x"\nrequires = ["nope"]\n'}) == [
-        "a/mods/x.toml:3: mod.requires.0: requires mod 'nope', which was not found"
+        "a/mods/x.toml:3:1: mod.requires.0: requires mod 'nope', which was not found"
     ]
     cycle = {"p.toml": '[mod]\nname = "p"\nrequires = ["q"]\n', "q.toml": '[mod]\nname = "q"\nrequires = ["p"]\n'}
-    assert problems_of(registry, tmp_path / "b", cycle) == ["b/mods/p.toml:3: mod.requires: dependency cycle: p -> q -> p"]
+    assert problems_of(registry, tmp_path / "b", cycle) == ["b/mods/p.toml:3:1: mod.requires: dependency cycle: p -> q -> p"]
     twins = {"one.toml": '[mod]\nname = "twin"\n', "two.toml": '[mod]\nname = "twin"\n'}
     assert problems_of(registry, tmp_path / "c", twins) == [
-        "c/mods/two.toml:2: mod.name: mod 'twin' is also defined by c/mods/one.toml"
+        "c/mods/two.toml:2:1: mod.name: mod 'twin' is also defined by c/mods/one.toml"
     ]
 
 
@@ -350,7 +350,7 @@ def test_empty_must_stay_empty(registry, tmp_path):
             """
         },
     )
-    assert problems == ["mods/void.toml:5: elements.base:empty.archetype: 'base:empty' must be 'empty'"]
+    assert problems == ["mods/void.toml:5:1: elements.base:empty.archetype: 'base:empty' must be 'empty'"]
 
 
 def test_a_particle_cannot_carry_a_particle(registry, tmp_path):
@@ -369,4 +369,4 @@ def test_a_particle_cannot_carry_a_particle(registry, tmp_path):
         },
         ["sparks"],
     )
-    assert [p.split("/")[-1] for p in problems] == ["sparks.toml:6: elements.spark.carries: a particle cannot carry a particle ('base:particle')"]
+    assert [p.split("/")[-1] for p in problems] == ["sparks.toml:6:1: elements.spark.carries: a particle cannot carry a particle ('base:particle')"]

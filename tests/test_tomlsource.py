@@ -46,7 +46,7 @@ def test_line_of_falls_back_to_the_nearest_written_parent():
     assert source.line_of(("elements", "lava", "lifetime", "frames")) == 10
     assert source.line_of(("elements", "lava", "density")) == 8
     assert source.line_of(("nowhere",)) is None
-    assert str(source.problem(("reactions", 1, "b"), "missing")) == "t.toml:18: reactions.1.b: missing"
+    assert str(source.problem(("reactions", 1, "b"), "missing")) == "t.toml:18:1: reactions.1.b: missing"
 
 
 def test_unreadable_file_is_a_problem_not_a_traceback(tmp_path):

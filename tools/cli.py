@@ -149,12 +149,10 @@ def validate(paths, mod_dirs) -> None:
 
     With no PATHS, checks every mod found (the bundled ones and ./mods).
     """
-    from sandmod.compiler import compile_mods
-    from sandmod.loading import load_registry, load_world
-    from sandmod.modset import find_mods
+    from sandmod.checking import check
+    from sandmod.loading import load_registry
     from sandmod.tomlsource import TomlSource
 
-    registry = load_registry()
     problems: list[Problem] = []
     folders, mod_files, worlds = list(mod_dirs), [], []
     if not paths and Path("mods").is_dir():
@@ -174,21 +172,12 @@ def validate(paths, mod_dirs) -> None:
             mod_files.append(path)
         else:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
-    ruleset = None
-    try:
-        ruleset = compile_mods(find_mods(registry, folders, mod_files).select(None))
-    except ProblemsError as exc:
-        problems.extend(exc.problems)
-    for world in worlds:
-        try:
-            load_world(world, mod_dirs=mod_dirs, registry=registry)
-        except ProblemsError as exc:
-            problems.extend(exc.problems)
-    if problems or ruleset is None:
-        raise ProblemsError(problems)
+    report = check(load_registry(), folders, mod_files, worlds, mod_dirs)
+    if problems or report.problems:
+        raise ProblemsError(problems + report.problems)
     click.echo(
-        f"ok: {len(ruleset.mods)} mods ({len(ruleset.elements)} elements, {len(ruleset.reactions)} reactions), "
-        f"{len(worlds)} worlds"
+        f"ok: {report.mods} mods ({report.elements} elements, {report.reactions} reactions, {report.tests} tests), "
+        f"{report.worlds} worlds"
     )
 
 

@@ -1,0 +1,73 @@
+"""``sandmod validate``: every problem in every mod, test and world file, in one pass.
+
+Files that fail their schema are reported and left out; the rest are still
+compiled (element references, reaction conflicts, reactions that never
+settle), their tests' element names resolved, and the world files loaded.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable
+
+from .errors import Problem, ProblemsError
+from .registry import Registry
+
+
+@dataclass
+class Report:
+    """What was checked, and what is wrong."""
+
+    mods: int = 0
+    elements: int = 0
+    reactions: int = 0
+    tests: int = 0
+    worlds: int = 0
+    problems: list[Problem] = field(default_factory=list)
+
+
+def check(
+    registry: Registry,
+    folders: Iterable[Path],
+    mod_files: Iterable[Path] = (),
+    worlds: Iterable[Path] = (),
+    world_mod_dirs: Iterable[Path] = (),
+) -> Report:
+    """Check the mods in ``folders`` and ``mod_files`` (with the plugins' mods), and the ``worlds``
+    (each with the mods beside it and in ``world_mod_dirs``)."""
+    from .compiler import compile_mods
+    from .loading import load_world
+    from .modset import discover_mods
+    from .modtests import TestRunner
+
+    folders = list(folders)
+    report = Report()
+    modset, report.problems = discover_mods(registry, folders, mod_files)
+    try:
+        ruleset = compile_mods(modset.select(None))
+    except ProblemsError as exc:
+        report.problems.extend(exc.problems)
+        usable = modset.usable()
+        try:  # what does not depend on a broken mod can still be checked
+            ruleset = compile_mods(modset.select(usable)) if usable and len(usable) < len(modset.mods) else None
+        except ProblemsError as more:
+            report.problems.extend(more.problems)
+            ruleset = None
+    if ruleset is not None:
+        report.mods, report.elements, report.reactions = len(ruleset.mods), len(ruleset.elements), len(ruleset.reactions)
+        runner = TestRunner(modset)
+        for case in runner.cases([m.name for m in ruleset.mods]):
+            report.tests += 1
+            try:
+                runner.check(case)
+            except ProblemsError as exc:
+                report.problems.extend(exc.problems)
+    for world in worlds:
+        report.worlds += 1
+        try:
+            load_world(world, mod_dirs=world_mod_dirs, registry=registry)
+        except ProblemsError as exc:
+            report.problems.extend(exc.problems)
+    report.problems = list(dict.fromkeys(report.problems))
+    return report
