@@ -181,6 +181,120 @@ def validate(paths, mod_dirs) -> None:
     )
 
 
+def _write_new(path: Path, text: str, *, replace: bool = False) -> None:
+    """Write ``text`` to ``path`` in one go; an existing file is an error unless ``replace``."""
+    from sandmod.recording import atomic_path
+
+    if path.exists() and not replace:
+        raise ProblemsError([Problem(display_path(path), None, "", "already exists; not overwriting it")])
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise ProblemsError([Problem(display_path(path), None, "", f"cannot write: {exc.strerror or exc}")]) from None
+    click.echo(f"wrote {display_path(path)}")
+
+
+def _name(pattern: str, what: str):
+    import re
+
+    def check(ctx, param, value: str) -> str:
+        if not re.fullmatch(pattern, value):
+            raise click.BadParameter(f"'{value}' is not a valid {what} (lower case letters, digits and _)")
+        return value
+
+    return check
+
+
+def _like(ref: str | None, mod_dirs):
+    """The spec of the element named by --like, from every mod found."""
+    if ref is None:
+        return None
+    from sandmod.loading import load_ruleset
+
+    ruleset = load_ruleset(None, ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs))
+    try:
+        return ruleset.elements[ruleset.index(ref)].spec
+    except KeyError as exc:
+        raise click.BadParameter(exc.args[0], param_hint="'--like'") from None
+
+
+@cli.group()
+def new() -> None:
+    """Start a new mod or element from a commented, valid template."""
+
+
+_ARCHETYPES = ("static", "powder", "liquid", "gas", "particle")
+
+
+@new.command("mod")
+@click.argument("name", callback=_name(r"[a-z][a-z0-9_]*", "mod name"))
+@click.option("--archetype", type=click.Choice(_ARCHETYPES), help="How its first element moves (default: powder, or --like's).")
+@click.option("--like", help="Start the first element from an existing element's parameters.")
+@click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True)
+@_mods_option
+def new_mod(name, archetype, like, folder, mod_dirs) -> None:
+    """Write FOLDER/NAME.toml: a mod with one element called NAME and a test of it."""
+    from sandmod import scaffold
+
+    spec = _like(like, mod_dirs)
+    archetype = archetype or (spec.archetype if spec is not None else "powder")
+    text = scaffold.new_mod(name, archetype, spec if spec is not None and spec.archetype == archetype else None)
+    path = folder / f"{name}.toml"
+    scaffold.check(text, display_path(path))
+    _write_new(path, text)
+
+
+@new.command("element")
+@click.argument("name", callback=_name(r"[a-z][a-z0-9_]*", "element name"))
+@click.option("--archetype", type=click.Choice(_ARCHETYPES), help="How it moves (default: --like's, else powder).")
+@click.option("--like", help="Start from an existing element's parameters (those its archetype accepts).")
+@click.option("--mod", "mod_file", type=click.Path(dir_okay=False, path_type=Path), help="Add it to this mod file instead of a new mod.")
+@click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True)
+@_mods_option
+def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
+    """Write a new element NAME (with a test): into --mod FILE, or as a new mod FOLDER/NAME.toml."""
+    from sandmod import scaffold
+    from sandmod.tomlsource import TomlSource
+
+    spec = _like(like, mod_dirs)
+    archetype = archetype or (spec.archetype if spec is not None else "powder")
+    if mod_file is None:
+        path = folder / f"{name}.toml"
+        text = scaffold.new_mod(name, archetype, spec)
+        scaffold.check(text, display_path(path))
+        _write_new(path, text)
+        return
+    source = TomlSource.read(mod_file)
+    if name in source.data.get("elements", {}):
+        raise ProblemsError([source.problem(("elements", name), f"'{name}' is already in this mod")])
+    _write_new(mod_file, scaffold.add_element(source.text, source.name, name, archetype, spec), replace=True)
+
+
+@cli.command()
+@click.option("--world", is_flag=True, help="The world file format instead of the mod format.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Write to this file (default: print it).")
+def schema(world, output) -> None:
+    """Print (or write) the JSON Schema of mod files, for editors' completion and checking.
+
+    \b
+    With Taplo / Even Better TOML, put this first line in a mod file:
+      #:schema ./mod.schema.json
+    """
+    if world:
+        from sandmod.worldspec import WorldFile as model
+    else:
+        from sandmod.modspec import ModFile as model
+    document = {"$schema": "https://json-schema.org/draft/2020-12/schema", **model.model_json_schema()}
+    document["title"] = "sandmod world file" if world else "sandmod mod file"
+    text = json.dumps(document, indent=2) + "\n"
+    if output is None:
+        click.echo(text, nl=False)
+    else:
+        _write_new(output, text, replace=True)
+
+
 @cli.command("test")
 @click.argument("mods", nargs=-1)
 @_mods_option
