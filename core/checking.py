@@ -25,6 +25,7 @@ class Report:
     tests: int = 0
     worlds: int = 0
     problems: list[Problem] = field(default_factory=list)
+    warnings: list[Problem] = field(default_factory=list)
 
 
 def check(
@@ -66,7 +67,7 @@ def check(
     for world in worlds:
         report.worlds += 1
         try:
-            load_world(world, mod_dirs=world_mod_dirs, registry=registry)
+            report.warnings += load_world(world, mod_dirs=world_mod_dirs, registry=registry).warnings
         except ProblemsError as exc:
             report.problems.extend(exc.problems)
     report.problems = list(dict.fromkeys(report.problems))

@@ -17,7 +17,7 @@ import numpy as np
 
 from .errors import Problem, ProblemsError
 from .hashing import chance_threshold
-from .modset import BASE_MOD, LoadedMod
+from .modset import LoadedMod
 from .modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
 from .tomlsource import TomlSource
 
@@ -103,6 +103,12 @@ class ElementInfo:
     source: TomlSource
     defined_by: str  # the mod whose definition is in force
     overrides: tuple[str, ...] = ()  # mods whose earlier definitions it replaced
+    history: tuple["Override", ...] = ()  # each override, in load order: who changed what
+
+    @property
+    def origin(self) -> str:
+        """The mod that first defined it."""
+        return self.overrides[0] if self.overrides else self.defined_by
 
     @property
     def mod(self) -> str:
@@ -111,6 +117,26 @@ class ElementInfo:
     @property
     def name(self) -> str:
         return self.id.split(":", 1)[1]
+
+
+@dataclass(frozen=True)
+class Override:
+    """One mod replacing an element another mod defined: where, and the fields whose values changed."""
+
+    mod: str
+    file: str
+    line: int | None
+    changes: tuple[tuple[str, object, object], ...]  # (field, before, after)
+
+    def describe(self) -> str:
+        where = self.file if self.line is None else f"{self.file}:{self.line}"
+        changed = "; ".join(f"{name} {before!r} -> {after!r}" for name, before, after in self.changes) or "no values changed"
+        return f"overridden by {self.mod} ({where}): {changed}"
+
+
+def _differences(before: Element, after: Element) -> tuple[tuple[str, object, object], ...]:
+    old, new = before.model_dump(exclude={"override"}), after.model_dump(exclude={"override"})
+    return tuple((k, old.get(k), new.get(k)) for k in dict.fromkeys([*old, *new]) if old.get(k) != new.get(k))
 
 
 @dataclass(frozen=True)
@@ -173,18 +199,18 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
         raise ProblemsError([Problem("mods", None, "", f"{len(order)} elements loaded; at most {MAX_ELEMENTS}")])
     ids = {element_id: i for i, element_id in enumerate(order)}
     elements = tuple(
-        ElementInfo(i, eid, defs[eid].spec, defs[eid].source, defs[eid].mod, tuple(defs[eid].replaced))
+        ElementInfo(i, eid, defs[eid].spec, defs[eid].source, defs[eid].mod, tuple(defs[eid].replaced), tuple(defs[eid].history))
         for i, eid in enumerate(order)
     )
     by_mod = {m.name: m for m in mods}
 
     def resolve(ref: str, mod: LoadedMod, loc: tuple) -> int | None:
-        found, message = _resolve(ref, mod.name, ids, (BASE_MOD, *mod.spec.mod.requires))
+        found, message = _resolve(ref, mod.name, ids, mod.requires)
         if found is None:
             problems.append(mod.source.problem(loc, message))
             return None
         owner = found.split(":", 1)[0]
-        if owner not in (mod.name, BASE_MOD) and owner not in mod.spec.mod.requires:
+        if owner not in (mod.name, *mod.requires):
             problems.append(mod.source.problem(loc, f"'{found}' is from mod '{owner}'; add '{owner}' to mod.requires"))
             return None
         return ids[found]
@@ -336,6 +362,7 @@ class _Definition:
     mod: str
     loc: tuple
     replaced: list[str] = field(default_factory=list)
+    history: list[Override] = field(default_factory=list)
 
 
 def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dict[str, _Definition]:
@@ -359,7 +386,10 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dic
                     )
                 )
             else:
-                defs[element_id] = _Definition(spec, mod.source, mod.name, loc, previous.replaced + [previous.mod])
+                change = Override(mod.name, mod.source.name, mod.source.line_of(loc), _differences(previous.spec, spec))
+                defs[element_id] = _Definition(
+                    spec, mod.source, mod.name, loc, previous.replaced + [previous.mod], previous.history + [change]
+                )
     return defs
 
 

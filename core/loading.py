@@ -10,13 +10,14 @@ These are the functions the CLI (and a Python user) calls::
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Sequence
 
 import pluggy
 
 from .compiler import Ruleset, compile_mods
+from .errors import Problem
 from .modset import ModSet, find_mods
 from .registry import Registry, collect, make_plugin_manager
 from .tomlsource import TomlSource
@@ -48,6 +49,7 @@ class LoadedWorld:
     ruleset: Ruleset
     world: World
     registry: Registry
+    warnings: list[Problem] = field(default_factory=list)  # e.g. other mod versions than it was made with
 
 
 def world_mod_dirs(path: Path, extra: Iterable[Path] = ()) -> list[Path]:
@@ -79,7 +81,25 @@ def load_world(
     modset: ModSet = find_mods(registry, world_mod_dirs(path, mod_dirs))
     ruleset = compile_mods(_select_for_world(modset, spec, source))
     world = build_world(spec, ruleset, source, seed)
-    return LoadedWorld(path, spec, source, ruleset, world, registry)
+    return LoadedWorld(path, spec, source, ruleset, world, registry, mod_warnings(spec, source, ruleset))
+
+
+def mod_warnings(spec: WorldFile, source: TomlSource, ruleset: Ruleset) -> list[Problem]:
+    """How the loaded mods differ from those the world records in ``world.made_with``."""
+    recorded = spec.world.made_with
+    if recorded is None:
+        return []
+    loaded = {m.name: m.spec.mod.version for m in ruleset.mods}
+    warnings = []
+    for name, version in recorded.items():
+        where = ("world", "made_with", name)
+        if name not in loaded:
+            warnings.append(source.problem(where, f"made with mod {name} {version}, which is not loaded now"))
+        elif loaded[name] != version:
+            warnings.append(source.problem(where, f"made with mod {name} {version}; loading {name} {loaded[name]}"))
+    for name in sorted(set(loaded) - set(recorded)):
+        warnings.append(source.problem(("world", "made_with"), f"mod {name} {loaded[name]} is loaded but the world was not made with it"))
+    return warnings
 
 
 def _select_for_world(modset: ModSet, spec: WorldFile, source: TomlSource):

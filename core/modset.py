@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Iterable, Sequence
 
 from .errors import Problem, ProblemsError, display_path
-from .modspec import ModFile
+from .modspec import ModFile, version_matches
 from .registry import Registry
 from .tomlsource import TomlSource
 from .validation import validate
@@ -37,7 +37,7 @@ class LoadedMod:
     @property
     def requires(self) -> list[str]:
         """The mods this one needs loaded first (``base`` is always among them)."""
-        own = list(self.spec.mod.requires)
+        own = self.spec.mod.required_names
         return own if self.name == BASE_MOD or BASE_MOD in own else [BASE_MOD, *own]
 
 
@@ -71,8 +71,17 @@ class ModSet:
             if mod.name in chosen:
                 continue
             chosen[mod.name] = mod
-            for i, need in enumerate(mod.spec.mod.requires):
-                if need in self.mods:
+            for i, (need, conditions) in enumerate(mod.spec.mod.requirements()):
+                found = self.mods.get(need)
+                if found is not None and not version_matches(found.spec.mod.version, conditions):
+                    problems.append(
+                        mod.source.problem(
+                            ("mod", "requires", i),
+                            f"requires mod '{mod.spec.mod.requires[i].strip()}', but {found.source.name} is version "
+                            f"{found.spec.mod.version}",
+                        )
+                    )
+                elif found is not None:
                     stack.append(need)
                 elif need in self.broken:
                     problems.append(mod.source.problem(("mod", "requires", i), f"requires mod '{need}', which has mistakes"))

@@ -27,6 +27,7 @@ parameters. Element names, tags and mod names are lower-case identifiers.
 
 from __future__ import annotations
 
+import re
 import textwrap
 from typing import Annotated, Literal, Union
 
@@ -62,6 +63,30 @@ MAX_TEMPERATURE = 9999.0
 MAX_BLAST_RADIUS = 32
 
 
+VERSION = r"\d+(?:\.\d+)*"
+VERSION_OPERATOR = r">=|<=|==|!=|>|<"
+REQUIREMENT = rf"{MOD_NAME}(?:\s*(?:{VERSION_OPERATOR})\s*{VERSION}(?:\s*,\s*(?:{VERSION_OPERATOR})\s*{VERSION})*)?"
+Requirement = Annotated[str, Field(pattern=rf"^\s*{REQUIREMENT}\s*$")]
+
+
+def version_tuple(version: str) -> tuple[int, ...]:
+    """'1.2.0-beta' -> (1, 2, 0): the numbers of the release, for comparing."""
+    numbers = re.match(r"\d+(?:\.\d+)*", version)
+    return tuple(int(n) for n in numbers.group().split(".")) if numbers else (0,)
+
+
+def version_matches(version: str, conditions: list[tuple[str, tuple[int, ...]]]) -> bool:
+    """Whether ``version`` meets every (operator, version) condition."""
+    have = version_tuple(version)
+    for op, wanted in conditions:
+        width = max(len(have), len(wanted))
+        a, b = have + (0,) * (width - len(have)), wanted + (0,) * (width - len(wanted))
+        ok = {">=": a >= b, "<=": a <= b, "==": a == b, "!=": a != b, ">": a > b, "<": a < b}[op]
+        if not ok:
+            return False
+    return True
+
+
 def _as_list(value: object) -> object:
     return [value] if isinstance(value, str) else value
 
@@ -80,10 +105,27 @@ class ModInfo(_Strict):
         description="The mod's version, e.g. '1.2.0'.",
     )
     description: str = Field("", max_length=2000, description="One or two sentences for 'sandmod list'.")
-    requires: list[ModName] = Field(
+    requires: list[Requirement] = Field(
         default_factory=list,
-        description="Mods whose elements this mod names; they are loaded first.",
+        description="Mods whose elements this mod names, loaded first; a version range may follow "
+        "the name: 'water>=2.0,<3'.",
     )
+
+    def requirements(self) -> list[tuple[str, list[tuple[str, tuple[int, ...]]]]]:
+        """``requires`` parsed: each mod's name and its version conditions, like ``[('>=', (2, 0))]``."""
+        parsed = []
+        for text in self.requires:
+            name = re.match(MOD_NAME, text.strip()).group()
+            conditions = [
+                (m.group(1), version_tuple(m.group(2)))
+                for m in re.finditer(rf"({VERSION_OPERATOR})\s*({VERSION})", text[len(name) :])
+            ]
+            parsed.append((name, conditions))
+        return parsed
+
+    @property
+    def required_names(self) -> list[str]:
+        return [name for name, _ in self.requirements()]
 
 
 class Lifetime(_Strict):
@@ -531,6 +573,7 @@ PATTERN_HINTS.update(
         f"^{NAME}$": "must be a lower-case name like 'acid_proof'",
         f"^{SELECTOR}$": "must be an element ('water'), a tag ('#metal'), '*', or one of those after '!'",
         r"^#[0-9a-fA-F]{6}$": "must be a colour like '#c2b280'",
+        f"^\\s*{REQUIREMENT}\\s*$": "must be a mod name, maybe with versions: 'water' or 'water>=2.0,<3'",
         f"^{TEST_NAME}$": "must be a short name like 'sinks_in_water' (lower case, digits, _ and -)",
     }
 )

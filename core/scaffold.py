@@ -147,3 +147,43 @@ def add_element(text: str, origin: str, name: str, archetype: str, like: BaseMod
 def check(text: str, origin: str) -> ModFile:
     """Parse and validate a mod file's text."""
     return validate(ModFile, TomlSource.parse(text, origin))
+
+
+def new_world(size: tuple[int, int], mods: list[str] | None, made_with: dict[str, str], pour: str) -> str:
+    """A world file: a stone floor, an emitter pouring ``pour``, and the mods it is made with."""
+    width, height = size
+    world: dict[str, Any] = {"width": width, "height": height, "seed": 0}
+    if mods is not None:
+        world["mods"] = mods
+    lines = ["# A world for 'sandmod render'. (0, 0) is the top-left cell; y grows downwards.", "[world]"]
+    lines += [_line(k, v) for k, v in world.items()]
+    lines += [
+        "",
+        "# The mods and versions this world was made with: loading it with others prints a warning.",
+        "[world.made_with]",
+        *(_line(k, v) for k, v in made_with.items()),
+        "",
+        "# Shapes painted before the first frame, in order: rect, circle, line, fill.",
+        "[[scene]]",
+        *(_line(k, v) for k, v in {"shape": "rect", "element": "stone", "x": 0, "y": height - 8, "width": width, "height": 8}.items()),
+        "",
+        "# Shapes that pour an element while start <= frame < stop.",
+        "[[emitters]]",
+        *(
+            _line(k, v)
+            for k, v in {"shape": "circle", "element": pour, "x": width // 2, "y": 8, "radius": 3, "start": 0, "stop": 200, "chance": 0.5}.items()
+        ),
+        "",
+        "[render]",
+        _line("frames", 300),
+        _line("every", 2),
+        _line("scale", 3),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def check_world(text: str, origin: str):
+    """Parse and validate a world file's text."""
+    from .worldspec import WorldFile
+
+    return validate(WorldFile, TomlSource.parse(text, origin))

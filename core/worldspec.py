@@ -88,6 +88,11 @@ class WorldInfo(_Strict):
             "0 none (movers still go one cell a frame)."
         ),
     )
+    made_with: dict[ModName, str] | None = Field(
+        None,
+        description="The mods and versions the world was made with ('sandmod new world' writes it); "
+        "loading it with other mods or versions prints a warning.",
+    )
 
 
 class _Shape(_Strict):

@@ -171,7 +171,12 @@ def test_list_json():
         "tags": [],
         "description": "",
         "plugin": "sandmod.plugins.toml_mods",
+        "file": by_id["water:water"]["file"],
+        "overrides": [],
     }
+    assert by_id["water:water"]["file"].endswith("water.toml")
+    stone = by_id["base:stone"]["overrides"]
+    assert [(o["mod"], sorted(o["changes"])) for o in stone] == [("lava", ["description", "heated"])]
     assert {"mod": "fire", "a": "fire", "b": "water", "a_becomes": "steam", "b_becomes": None, "chance": 0.8} in data["reactions"]
     assert [m["name"] for m in data["mods"]][0] == "base"
 

@@ -60,6 +60,8 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
     from sandmod import kernelcache
 
     loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
+    for warning in loaded.warnings:
+        click.echo(f"warning: {warning}", err=True)
     settings = loaded.spec.render
     if output is None:
         output = world.parent / settings.output if settings.output else Path(f"{world.stem}.gif")
@@ -91,12 +93,16 @@ def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> N
 
 @cli.command("list")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+@click.option("--provenance", is_flag=True, help="Show which mod and file defined each element, and who overrode what.")
 @_mods_option
-def list_(as_json, mod_dirs) -> None:
-    """List the elements and reactions of every mod found."""
+def list_(as_json, provenance, mod_dirs) -> None:
+    """List the elements and reactions of every mod found (the bundled ones, ./mods, --mods)."""
     from sandmod.loading import load_ruleset
 
-    ruleset = load_ruleset(None, mod_dirs)
+    ruleset = load_ruleset(None, ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs))
+    if provenance and not as_json:
+        _provenance(ruleset)
+        return
     plugin_of = {m.name: m.plugin for m in ruleset.mods}
     elements = [
         {
@@ -107,6 +113,10 @@ def list_(as_json, mod_dirs) -> None:
             "tags": list(e.spec.tags),
             "description": e.spec.description,
             "plugin": plugin_of[e.defined_by],
+            "file": e.source.name,
+            "overrides": [
+                {"mod": o.mod, "file": o.file, "line": o.line, "changes": {k: [a, b] for k, a, b in o.changes}} for o in e.history
+            ],
         }
         for e in ruleset.elements
     ]
@@ -133,6 +143,17 @@ def list_(as_json, mod_dirs) -> None:
         for r in reactions
     ]
     _table(("REACTION", "BECOMES", "CHANCE", "MOD"), rows)
+
+
+def _provenance(ruleset) -> None:
+    """Each element, the mod (and plugin) that defined it, and every override with what it changed."""
+    plugin_of = {m.name: m.plugin for m in ruleset.mods}
+    file_of = {m.name: m.source.name for m in ruleset.mods}
+    for e in ruleset.elements:
+        origin = e.origin
+        click.echo(f"{e.id}: defined by {origin} ({file_of[origin]}, plugin {plugin_of[origin]})")
+        for change in e.history:
+            click.echo(f"  {change.describe()}")
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
@@ -173,6 +194,8 @@ def validate(paths, mod_dirs) -> None:
         else:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
     report = check(load_registry(), folders, mod_files, worlds, mod_dirs)
+    for warning in report.warnings:
+        click.echo(f"warning: {warning}", err=True)
     if problems or report.problems:
         raise ProblemsError(problems + report.problems)
     click.echo(
@@ -270,6 +293,36 @@ def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
     if name in source.data.get("elements", {}):
         raise ProblemsError([source.problem(("elements", name), f"'{name}' is already in this mod")])
     _write_new(mod_file, scaffold.add_element(source.text, source.name, name, archetype, spec), replace=True)
+
+
+@new.command("world")
+@click.argument("name", callback=_name(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", "file name"))
+@click.option("--mod", "mods", multiple=True, help="A mod the world loads (repeatable; default: every mod found).")
+@click.option("--pour", help="The element its emitter pours (default: the first one of the mods).")
+@click.option("--size", type=(click.IntRange(16, 4096), click.IntRange(16, 4096)), default=(160, 120), show_default=True)
+@_mods_option
+def new_world(name, mods, pour, size, mod_dirs) -> None:
+    """Write NAME.toml: a world with a floor and an emitter, recording the mods and versions it is made with."""
+    from sandmod import scaffold
+    from sandmod.loading import load_registry
+    from sandmod.modset import find_mods
+    from sandmod.compiler import compile_mods
+
+    modset = find_mods(load_registry(), ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs))
+    ruleset = compile_mods(modset.select(list(mods) or None))
+    if pour is None:
+        wanted = [m for m in ruleset.mods if not mods or m.name in mods]
+        movers = [e for e in ruleset.elements if e.spec.archetype in ("powder", "liquid") and any(e.defined_by == m.name for m in wanted)]
+        pour = (movers or [e for e in ruleset.elements if e.index])[0].id
+    else:
+        try:
+            pour = ruleset.elements[ruleset.index(pour)].id
+        except KeyError as exc:
+            raise click.BadParameter(exc.args[0], param_hint="'--pour'") from None
+    text = scaffold.new_world(size, list(mods) or None, {m.name: m.spec.mod.version for m in ruleset.mods}, pour)
+    path = Path(name if name.endswith(".toml") else f"{name}.toml")
+    scaffold.check_world(text, display_path(path))
+    _write_new(path, text)
 
 
 @cli.command()
