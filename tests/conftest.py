@@ -12,6 +12,8 @@ from sandmod.compiler import Ruleset
 from sandmod.loading import load_registry, load_ruleset
 from sandmod.world import World
 
+pytest_plugins = ["pytester"]  # to test sandmod's own pytest plugin
+
 LEGEND = {
     ".": "empty",
     "#": "stone",

@@ -1,0 +1,139 @@
+"""Tools for mod authors: new, schema, validate in one pass, version ranges, provenance, made_with."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+
+import pytest
+from click.testing import CliRunner
+
+from sandmod.errors import ProblemsError
+from sandmod.modset import find_mods
+from sandmod.modtests import TestRunner
+from sandmod.tools.cli import cli
+
+from conftest import write_mods
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(cli, list(args))
+
+
+def test_new_mod_and_elements_are_valid_commented_and_pass_their_tests(registry, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert invoke("new", "mod", "goo").stdout == "wrote mods/goo.toml\n"
+    for args in (["slime", "--like", "water", "--mod", "mods/goo.toml"], ["spark", "--archetype", "particle"], ["wall", "--archetype", "static"]):
+        assert invoke("new", "element", *args).exit_code == 0
+    text = (tmp_path / "mods" / "goo.toml").read_text()
+    assert "# Mass per volume in kg/m3" in text and "# lifetime = {" in text
+    data = tomllib.loads(text)
+    assert data["elements"]["goo"]["archetype"] == "powder"
+    slime = data["elements"]["slime"]
+    assert slime["archetype"] == "liquid" and slime["dispersion"] == 4 and slime["heat_capacity"] == 4.0
+    assert "heated" not in slime  # references to water's elements are not copied
+    assert [t["name"] for t in data["tests"]] == ["goo_exists", "slime_exists"]
+    runner = TestRunner(find_mods(registry, [tmp_path / "mods"]))
+    outcomes = [runner.run(case) for case in runner.cases(["goo", "spark", "wall"])]
+    assert [o.case.id for o in outcomes if o.passed] == ["goo:goo_exists", "goo:slime_exists", "spark:spark_vanishes", "wall:wall_exists"]
+
+
+def test_new_never_overwrites_and_checks_names(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    invoke("new", "mod", "goo")
+    before = (tmp_path / "mods" / "goo.toml").read_text()
+    again = invoke("new", "mod", "goo")
+    assert again.exit_code == 2 and again.stderr == "mods/goo.toml: already exists; not overwriting it\n"
+    twice = invoke("new", "element", "goo", "--mod", "mods/goo.toml")
+    assert twice.exit_code == 2 and "'goo' is already in this mod" in twice.stderr
+    assert (tmp_path / "mods" / "goo.toml").read_text() == before
+    assert invoke("new", "element", "Bad").exit_code == 2
+    assert "unknown element 'watr'" in invoke("new", "element", "x", "--like", "watr").stderr
+
+
+def test_schema_describes_the_mod_format(tmp_path):
+    out = tmp_path / "mod.schema.json"
+    assert invoke("schema", "-o", str(out)).exit_code == 0
+    schema = json.loads(out.read_text())
+    assert schema["title"] == "sandmod mod file" and schema["additionalProperties"] is False
+    assert set(schema["properties"]) == {"mod", "elements", "reactions", "tests"}
+    liquid = schema["$defs"]["LiquidElement"]["properties"]
+    assert liquid["viscosity"]["maximum"] if "maximum" in liquid["viscosity"] else liquid["viscosity"]["exclusiveMaximum"] == 1
+    assert "dispersion" in schema["$defs"]["LiquidElement"]["required"]
+    world = json.loads(invoke("schema", "--world").stdout)
+    assert "made_with" in world["$defs"]["WorldInfo"]["properties"]
+
+
+BROKEN = {
+    "a.toml": '[mod]\nname = "a"\n[elements.x]\narchetype = "static"\ncolor = "#12345"\n',
+    "b.toml": '[mod]\nname = "b"\nrequires = ["a"]\n[elements.y]\narchetype = "static"\ncolor = "#123456"\n',
+    "c.toml": '[mod]\nname = "c"\n[elements.z]\narchetype = "static"\ncolor = "#123456"\nlifetime = { frames = 3, becomes = "snad" }\n',
+    "d.toml": (
+        '[mod]\nname = "d"\n[elements.tic]\narchetype = "static"\ncolor = "#ff0000"\n'
+        '[elements.tac]\narchetype = "static"\ncolor = "#00ff00"\n'
+        '[elements.yin]\narchetype = "static"\ncolor = "#000000"\nheated = { above = 50, becomes = "yang" }\n'
+        '[elements.yang]\narchetype = "static"\ncolor = "#ffffff"\ncooled = { below = 60, becomes = "yin" }\n'
+        '[[reactions]]\na = "tic"\nb = "tac"\na_becomes = "tac"\nb_becomes = "tic"\nchance = 0.5\n'
+    ),
+}
+
+
+def test_validate_reports_every_file_in_one_pass(tmp_path, monkeypatch):
+    write_mods(tmp_path / "mods", BROKEN)
+    monkeypatch.chdir(tmp_path)
+    result = invoke("validate")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "mods/a.toml:5:1: elements.x.color: must be a colour like '#c2b280' (got '#12345')",
+        "mods/b.toml:3:1: mod.requires.0: requires mod 'a', which has mistakes",
+        "mods/c.toml:6:26: elements.z.lifetime.becomes: unknown element 'snad' (did you mean 'sand'?)",
+        "mods/d.toml:17:1: reactions.0: these reactions never settle: tac + tic -> tic + tac; touching cells would "
+        "change forever (give one of them a temperature range, or end the chain)",
+        "mods/d.toml:12:12: elements.yin.heated.above: yin turns into yang above 50 degrees, but yang turns back below 60: "
+        "between the two it would change every frame; make yang's cooled.below at most 50",
+    ]
+
+
+def test_requires_with_version_ranges(registry, tmp_path):
+    def problems(requires: str) -> list[str]:
+        mod = f'[mod]\nname = "m"\nrequires = [{requires}]\n'
+        try:
+            find_mods(registry, [write_mods(tmp_path / "mods", {"m.toml": mod})]).select(["m"])
+        except ProblemsError as exc:
+            return [str(p).split("/mods/", 1)[-1] for p in exc.problems]
+        return []
+
+    assert problems('"water>=2.0,<3", "sand >= 1.1"') == []
+    assert problems('"water<2"') == ["m.toml:3:1: mod.requires.0: requires mod 'water<2', but mods/water.toml is version 2.0.0"]
+    assert problems('"sand", "water==1.0"') == ["m.toml:3:1: mod.requires.1: requires mod 'water==1.0', but mods/water.toml is version 2.0.0"]
+    with pytest.raises(ProblemsError) as caught:
+        find_mods(registry, [write_mods(tmp_path / "bad", {"m.toml": '[mod]\nname = "m"\nrequires = ["water>>2"]\n'})])
+    assert str(caught.value).endswith("mod.requires.0: must be a mod name, maybe with versions: 'water' or 'water>=2.0,<3' (got 'water>>2')")
+
+
+def test_list_provenance_shows_overrides(tmp_path, monkeypatch):
+    write_mods(tmp_path / "mods", {"red.toml": '[mod]\nname = "red"\nrequires = ["sand"]\n[elements."sand:sand"]\noverride = true\narchetype = "powder"\ncolor = "#cc3322"\ndensity = 1600\n'})
+    monkeypatch.chdir(tmp_path)
+    lines = invoke("list", "--provenance").stdout.splitlines()
+    at = lines.index(next(line for line in lines if line.startswith("sand:sand: ")))
+    assert lines[at].startswith("sand:sand: defined by sand (")
+    assert lines[at + 1].startswith("  overridden by red (mods/red.toml:4): ")
+    assert "color ['#dcc38a', '#d2b478', '#e4cf9c'] -> ['#cc3322']" in lines[at + 1]
+
+
+def test_worlds_record_their_mods_and_warn_when_they_differ(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert invoke("new", "world", "w", "--mod", "sand", "--size", "32", "32").exit_code == 0
+    data = tomllib.loads((tmp_path / "w.toml").read_text())
+    assert data["world"]["made_with"] == {"base": "1.1.0", "glass": "1.0.0", "sand": "1.1.0"}
+    assert data["emitters"][0]["element"] == "sand:sand"
+    clean = invoke("validate", "w.toml")
+    assert clean.exit_code == 0 and clean.stderr == ""
+    text = (tmp_path / "w.toml").read_text().replace('sand = "1.1.0"', 'sand = "1.0.0"').replace('glass = "1.0.0"\n', "")
+    (tmp_path / "w.toml").write_text(text)
+    result = invoke("validate", "w.toml")
+    assert result.exit_code == 0
+    assert result.stderr.splitlines() == [
+        "warning: w.toml:11:1: world.made_with.sand: made with mod sand 1.0.0; loading sand 1.1.0",
+        "warning: w.toml:9:1: world.made_with: mod glass 1.0.0 is loaded but the world was not made with it",
+    ]
