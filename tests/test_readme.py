@@ -25,8 +25,21 @@ def test_the_readme_mod_and_world_load_and_render_a_frame(tmp_path):
     assert ruleset.elements[ruleset.index("mud")].spec.lifetime.becomes == "sand"
     loaded = load_world(tmp_path / "world.toml")  # it names only sand and water
     assert "mud:mud" not in {e.id for e in loaded.ruleset.elements}
+    assert loaded.warnings == []  # its made_with matches the bundled mods
     loaded.world.step()
     assert loaded.world.counts()["water:water"] > 0
+
+
+def test_the_readme_mod_test_passes(registry, tmp_path):
+    from sandmod.modset import find_mods
+    from sandmod.modtests import TestRunner
+
+    test = next(b for b in toml_blocks() if "[[tests]]" in b)
+    (tmp_path / "mods").mkdir()
+    (tmp_path / "mods" / "readme.toml").write_text('[mod]\nname = "readme"\nrequires = ["sand"]\n\n' + test)
+    runner = TestRunner(find_mods(registry, [tmp_path / "mods"]))
+    (case,) = runner.cases(["readme"])
+    assert runner.run(case).passed
 
 
 def test_the_readme_commands_use_files_that_exist():
