@@ -7,6 +7,7 @@ the pydantic models as a comment, so the file documents itself.
 from __future__ import annotations
 
 import textwrap
+import typing
 from typing import Any
 
 import tomli_w
@@ -44,10 +45,9 @@ CREATABLE = tuple(a for a in ARCHETYPES if a != "empty")
 
 
 def _model(archetype: str) -> type[BaseModel]:
-    for member in Element.__origin__.__args__:  # Annotated[Union[...], Field(...)]
-        if member.model_fields["archetype"].annotation.__args__ == (archetype,):
-            return member
-    raise ValueError(f"no archetype {archetype!r}")
+    """The element model of an archetype (a member of the ``Element`` union)."""
+    union = typing.get_args(Element)[0]  # Element is Annotated[Union[...], Field(discriminator=...)]
+    return next(m for m in typing.get_args(union) if typing.get_args(m.model_fields["archetype"].annotation) == (archetype,))
 
 
 def _comment(text: str) -> str:

@@ -238,7 +238,7 @@ def test_commands_that_do_not_simulate_do_not_import_numba(tmp_path):
         import sys
         from click.testing import CliRunner
         from sandmod.tools.cli import cli
-        for args in (["list"], ["validate", {str(EXAMPLES / "hourglass.toml")!r}]):
+        for args in (["list"], ["validate", {str(EXAMPLES / "hourglass.toml")!r}], ["validate"], ["schema"], ["list", "--provenance"]):
             result = CliRunner().invoke(cli, args)
             assert result.exit_code == 0, result.output
         assert "numba" not in sys.modules, "numba was imported"

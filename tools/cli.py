@@ -33,6 +33,11 @@ def cli() -> None:
     """A falling-sand engine in which every element is data."""
 
 
+def _mod_folders(mod_dirs) -> list[Path]:
+    """./mods when there is one, then every --mods DIR."""
+    return ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
+
+
 _mods_option = click.option(
     "--mods",
     "mod_dirs",
@@ -99,7 +104,7 @@ def list_(as_json, provenance, mod_dirs) -> None:
     """List the elements and reactions of every mod found (the bundled ones, ./mods, --mods)."""
     from sandmod.loading import load_ruleset
 
-    ruleset = load_ruleset(None, ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs))
+    ruleset = load_ruleset(None, _mod_folders(mod_dirs))
     if provenance and not as_json:
         _provenance(ruleset)
         return
@@ -236,7 +241,7 @@ def _like(ref: str | None, mod_dirs):
         return None
     from sandmod.loading import load_ruleset
 
-    ruleset = load_ruleset(None, ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs))
+    ruleset = load_ruleset(None, _mod_folders(mod_dirs))
     try:
         return ruleset.elements[ruleset.index(ref)].spec
     except KeyError as exc:
@@ -308,7 +313,7 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
     from sandmod.modset import find_mods
     from sandmod.compiler import compile_mods
 
-    modset = find_mods(load_registry(), ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs))
+    modset = find_mods(load_registry(), _mod_folders(mod_dirs))
     ruleset = compile_mods(modset.select(list(mods) or None))
     if pour is None:
         wanted = [m for m in ruleset.mods if not mods or m.name in mods]
@@ -363,7 +368,7 @@ def test_(mods, mod_dirs) -> None:
     from sandmod.modset import discover_mods
     from sandmod.modtests import TestRunner
 
-    folders = ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
+    folders = _mod_folders(mod_dirs)
     modset, problems = discover_mods(load_registry(), folders)
     runner = TestRunner(modset)
     try:
