@@ -238,11 +238,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
     reactions = _compile_reactions(mods, elements, t, resolve, problems)
-
-    def resolve_id(ref: str, d: _Definition) -> str | None:
-        return _resolve(ref, d.mod, ids, by_mod[d.mod].requires)[0]
-
-    problems.extend(_endless_phase_changes(defs, resolve_id))
+    problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
     palette, looks = _palette(elements)
@@ -575,22 +571,22 @@ def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Pr
     return problems
 
 
-def _endless_phase_changes(defs: dict[str, "_Definition"], resolve_id) -> list[Problem]:
+def _endless_phase_changes(t: Tables, elements: Sequence[ElementInfo], defs: dict[str, "_Definition"]) -> list[Problem]:
     """An element that turns into another when heated, which turns back when cooled, above the first's limit."""
     problems: list[Problem] = []
-    for element_id, d in defs.items():
-        heated = d.spec.heated
-        other = defs.get(resolve_id(heated.becomes, d) or "") if heated is not None else None
-        if other is None or other.spec.cooled is None or resolve_id(other.spec.cooled.becomes, other) != element_id:
+    for info in elements:
+        other = int(t.heated_into[info.index])
+        if not (t.thermal[info.index] & HEATED and t.thermal[other] & COOLED and t.cooled_into[other] == info.index):
             continue
-        if other.spec.cooled.below > heated.above:
-            name, other_name = element_id.split(":")[1], heated.becomes
+        above, below = info.spec.heated.above, elements[other].spec.cooled.below
+        if below > above:
+            d, other_name = defs[info.id], elements[other].name
             problems.append(
                 d.source.problem(
                     d.loc + ("heated", "above"),
-                    f"{name} turns into {other_name} above {heated.above:g} degrees, but {other_name} turns back "
-                    f"below {other.spec.cooled.below:g}: between the two it would change every frame; "
-                    f"make {other_name}'s cooled.below at most {heated.above:g}",
+                    f"{info.name} turns into {other_name} above {above:g} degrees, but {other_name} turns back "
+                    f"below {below:g}: between the two it would change every frame; "
+                    f"make {other_name}'s cooled.below at most {above:g}",
                 )
             )
     return problems

@@ -150,9 +150,9 @@ def discover_mods(
             loaded.append(LoadedMod(validate(ModFile, source), source, plugin))
         except ProblemsError as exc:
             problems.extend(exc.problems)
-            name = source.data.get("mod", {}).get("name") if isinstance(source.data.get("mod"), dict) else None
-            if isinstance(name, str):
-                broken.add(name)
+            info = source.data.get("mod")
+            if isinstance(info, dict) and isinstance(info.get("name"), str):
+                broken.add(info["name"])
 
     folders = [(entry.value, entry.plugin) for entry in registry.mod_dirs]
     for folder in extra_dirs:
