@@ -1,15 +1,18 @@
-"""Output formats: what a recorder is, and writing its file atomically.
+"""Output formats: what a recorder is, and writing its output atomically.
 
-A recorder receives finished frames (palette indices, already scaled) and
-writes them to a path. sandmod hands it a temporary path beside the real
+A recorder receives finished frames (palette indices, already cropped and
+scaled) and writes them to a path: a file, or for a recorder that writes a
+folder of images, a folder. sandmod hands it a temporary path beside the real
 output and renames it into place only when the recorder closes cleanly, so a
-failed or interrupted render never leaves a half-written file.
+failed or interrupted render never leaves a half-written output.
 """
 
 from __future__ import annotations
 
 import contextlib
+import fnmatch
 import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +29,16 @@ class VideoSettings:
     height: int
     palette: bytes  # 768 bytes: 256 RGB triples
     fps: float
-    loop: int = 0  # 0 = forever
+    loop: int = 0  # times the animation plays in all; 0 = forever
+
+    def rgb(self, frame: np.ndarray) -> np.ndarray:
+        """A palette frame as a (height, width, 3) uint8 RGB array, for formats without palettes."""
+        return np.frombuffer(self.palette, np.uint8).reshape(256, 3)[frame]
+
+    @property
+    def frame_ms(self) -> int:
+        """How long each image shows, in whole milliseconds."""
+        return max(1, round(1000 / self.fps))
 
 
 class Recorder(Protocol):
@@ -47,6 +59,7 @@ class RecorderSpec:
     extensions: tuple[str, ...]
     open: Callable[[Path, VideoSettings], Recorder]
     description: str = ""
+    folder: str | None = None  # for a recorder that writes a folder: a glob of its files' names, e.g. "frame_*.png"
 
 
 @contextlib.contextmanager
@@ -63,6 +76,49 @@ def atomic_path(target: Path) -> Iterator[Path]:
         os.replace(tmp, target)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def atomic_folder(target: Path, files: str) -> Iterator[Path]:
+    """Yield a temporary folder beside ``target``; on success it takes ``target``'s place.
+
+    An existing ``target`` is replaced only when every file in it matches the
+    glob ``files`` (an earlier render's frames); otherwise FileExistsError,
+    before anything is written.
+    """
+    target = Path(target)
+    if target.exists():
+        if not target.is_dir() or not all(p.is_file() and fnmatch.fnmatchcase(p.name, files) for p in target.iterdir()):
+            raise FileExistsError(f"{target} exists and holds other files than an earlier render's {files}")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent))
+    try:
+        yield tmp
+        os.chmod(tmp, 0o777 & ~_umask())
+        if target.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=target.parent))
+            os.replace(target, old / "frames")
+            os.replace(tmp, target)
+            shutil.rmtree(old)
+        else:
+            os.replace(tmp, target)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp)
+
+
+def palette_image(frame: np.ndarray, palette: bytes):
+    """A palette frame as a pillow image in mode ``P``."""
+    from PIL import Image
+
+    image = Image.fromarray(np.ascontiguousarray(frame, dtype=np.uint8), mode="P")
+    image.putpalette(palette)
+    return image
+
+
+def write_png(path: Path, frame: np.ndarray, palette: bytes) -> None:
+    """Write one palette frame as an indexed PNG."""
+    palette_image(frame, palette).save(path, format="PNG", compress_level=1)
 
 
 def _umask() -> int:

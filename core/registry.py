@@ -23,7 +23,13 @@ from .tomlsource import TomlSource
 T = TypeVar("T")
 
 #: Built-in plugins, registered by module name.
-BUILTIN_PLUGINS = ("sandmod.plugins.toml_mods", "sandmod.plugins.gif")
+BUILTIN_PLUGINS = (
+    "sandmod.plugins.toml_mods",
+    "sandmod.plugins.gif",
+    "sandmod.plugins.apng",
+    "sandmod.plugins.webp",
+    "sandmod.plugins.png_frames",
+)
 #: Comma-separated plugin names to leave out (built-in or installed).
 DISABLE_ENV = "SANDMOD_DISABLE_PLUGINS"
 
@@ -46,12 +52,19 @@ class Registry:
     recorders: dict[str, Registered[RecorderSpec]] = field(default_factory=dict)
 
     def recorder_for(self, path: Path) -> RecorderSpec | None:
-        """The recorder that writes files with ``path``'s extension."""
-        suffix = path.suffix.lower()
+        """The recorder that writes files with ``path``'s extension (a folder recorder: no extension)."""
+        suffix = Path(path).suffix.lower()
         for entry in reversed(self.recorders.values()):  # a later plugin wins
-            if suffix in entry.value.extensions:
-                return entry.value
+            spec = entry.value
+            if suffix in spec.extensions or (not suffix and spec.folder):
+                return spec
         return None
+
+    def recorder_choices(self) -> str:
+        """The formats and their extensions, for error messages: 'gif (.gif), ...'."""
+        return ", ".join(
+            f"{name} ({', '.join(e.value.extensions) or 'a folder'})" for name, e in sorted(self.recorders.items())
+        )
 
 
 def make_plugin_manager(*, entry_points: bool = True) -> pluggy.PluginManager:

@@ -2,12 +2,61 @@
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, NamedTuple
 
-from .recording import RecorderSpec, VideoSettings, atomic_path
+import numpy as np
+
+from .recording import RecorderSpec, VideoSettings, atomic_folder, atomic_path, write_png
 from .world import World
+
+
+class Crop(NamedTuple):
+    """A region of the world in cells: left column, top row, width, height."""
+
+    x: int
+    y: int
+    width: int
+    height: int
+
+    def fits(self, width: int, height: int) -> bool:
+        """Does the region lie inside a ``width`` x ``height`` world?"""
+        return self.x >= 0 and self.y >= 0 and self.width >= 1 and self.height >= 1 and (
+            self.x + self.width <= width and self.y + self.height <= height
+        )
+
+
+@dataclass(frozen=True)
+class Framing:
+    """Which cells an image shows and how large: a crop (all cells if None), then ``scale`` pixels a cell."""
+
+    scale: int = 1
+    crop: Crop | None = None
+
+    def size(self, world: World) -> tuple[int, int]:
+        """The image's width and height in pixels."""
+        width, height = (world.width, world.height) if self.crop is None else (self.crop.width, self.crop.height)
+        return width * self.scale, height * self.scale
+
+    def image(self, world: World) -> np.ndarray:
+        """The world's current frame as palette indices, cropped and scaled."""
+        frame = world.image()
+        if self.crop is not None:
+            x, y, w, h = self.crop
+            frame = frame[y : y + h, x : x + w]
+        return enlarge(frame, self.scale)
+
+
+def enlarge(frame: np.ndarray, scale: int) -> np.ndarray:
+    """Each pixel as a ``scale`` x ``scale`` block (nearest neighbour)."""
+    if scale == 1:
+        return frame
+    height, width = frame.shape
+    big = np.empty((height, scale, width, scale), frame.dtype)
+    big[...] = frame[:, None, :, None]
+    return big.reshape(height * scale, width * scale)
 
 
 @dataclass(frozen=True)
@@ -19,6 +68,7 @@ class RenderResult:
     images: int  # images written
     width: int  # image size in pixels
     height: int
+    still: Path | None = None
 
 
 def render(
@@ -28,24 +78,38 @@ def render(
     *,
     frames: int,
     every: int = 1,
-    scale: int = 1,
+    framing: Framing = Framing(),
     fps: float = 25,
+    loop: int = 0,
+    still: Path | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> RenderResult:
-    """Simulate ``frames`` frames, write an image every ``every`` frames (and the first), atomically."""
-    width, height = world.width * scale, world.height * scale
-    settings = VideoSettings(width, height, world.ruleset.palette, fps)
+    """Simulate ``frames`` frames and record an image every ``every`` frames (and the first).
+
+    Everything is written atomically: on any failure neither ``output`` nor
+    ``still`` (a PNG of the last frame) is touched.
+    """
+    width, height = framing.size(world)
+    settings = VideoSettings(width, height, world.ruleset.palette, fps, loop)
     images = 0
-    with atomic_path(output) as tmp:
+    with contextlib.ExitStack() as stack:
+        place = atomic_folder(output, recorder.folder) if recorder.folder else atomic_path(output)
+        tmp = stack.enter_context(place)
+        still_tmp = stack.enter_context(atomic_path(still)) if still is not None else None
         out = recorder.open(tmp, settings)
-        out.add_frame(world.image(scale))
+        image = framing.image(world)
+        out.add_frame(image)
         images += 1
         for done in range(1, frames + 1):
             world.step()
+            if done % every == 0 or (done == frames and still_tmp is not None):
+                image = framing.image(world)
             if done % every == 0:
-                out.add_frame(world.image(scale))
+                out.add_frame(image)
                 images += 1
             if progress is not None:
                 progress(1)
         out.close()
-    return RenderResult(Path(output), frames, images, width, height)
+        if still_tmp is not None:
+            write_png(still_tmp, image, settings.palette)
+    return RenderResult(Path(output), frames, images, width, height, still)

@@ -1,81 +1,214 @@
-"""Build a :class:`World` from a validated world file: paint the scene, set up emitters and sprays."""
+"""Build a :class:`World` from a validated world file: the scene, emitters, sprays, explosions, timeline."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from .compiler import Ruleset
 from .errors import Problem, ProblemsError
-from .shapes import circle_mask, fill_mask, line_mask, rect_mask
-from .tomlsource import TomlSource
-from .world import Emitter, Spray, World
-from .worldspec import Circle, Fill, Line, Rect, WorldFile
+from .pictures import PictureError, fit, hex_rgb, legend_indices, read_rgba
+from .shapes import circle_mask, fill_mask, rect_mask, stroke_mask
+from .tomlsource import Loc, TomlSource
+from .world import Emitter, Heater, Painting, Spray, Switches, World
+from .worldspec import (
+    Burst,
+    CircleArea,
+    FillArea,
+    LineArea,
+    Picture,
+    RectArea,
+    StrokeArea,
+    WorldFile,
+)
+
+Layer = Callable[[np.ndarray], np.ndarray]  # the world's cells -> the element each cell becomes (-1: unchanged)
 
 
-def shape_mask(shape: Rect | Circle | Line | Fill, cells: np.ndarray) -> np.ndarray:
+def shape_mask(shape: RectArea | CircleArea | LineArea | StrokeArea | FillArea, cells: np.ndarray) -> np.ndarray:
     """The cells a shape covers in a world holding ``cells``."""
     height, width = cells.shape
-    if isinstance(shape, Rect):
+    if isinstance(shape, RectArea):
         return rect_mask(width, height, shape.x, shape.y, shape.width, shape.height)
-    if isinstance(shape, Circle):
+    if isinstance(shape, CircleArea):
         return circle_mask(width, height, shape.x, shape.y, shape.radius)
-    if isinstance(shape, Line):
-        return line_mask(width, height, tuple(shape.start), tuple(shape.end), shape.thickness)
+    if isinstance(shape, LineArea):
+        return stroke_mask(width, height, [tuple(shape.start), tuple(shape.end)], shape.thickness)
+    if isinstance(shape, StrokeArea):
+        return stroke_mask(width, height, [tuple(p) for p in shape.points], shape.thickness)
     x, y = shape.at
     if not (0 <= x < width and 0 <= y < height):
         return np.zeros_like(cells, bool)
     return fill_mask(cells, x, y)
 
 
+@dataclass
+class _Builder:
+    """Turns a world file's parts into what the world runs, collecting every problem on the way."""
+
+    spec: WorldFile
+    ruleset: Ruleset
+    source: TomlSource
+    world: World
+    problems: list[Problem] = field(default_factory=list)
+
+    def note(self, loc: Loc, message: str) -> None:
+        self.problems.append(self.source.problem(loc, message))
+
+    def element(self, loc: Loc, ref: str) -> int | None:
+        try:
+            return self.ruleset.index(ref)
+        except KeyError as exc:
+            self.note(loc, exc.args[0])
+            return None
+
+    def area(self, loc: Loc, shape, what: str = "the shape") -> Callable[[np.ndarray], np.ndarray] | None:
+        """The shape's mask function, or None (problem noted) when it covers no cell of the world now."""
+        if not shape_mask(shape, self.world.cells).any():
+            self.note(loc, f"{what} lies outside the {self.world.width}x{self.world.height} world")
+            return None
+        return lambda cells: shape_mask(shape, cells)
+
+    def layer(self, loc: Loc, shape) -> Layer | None:
+        """What painting a shape (or a picture) does, or None (problem noted)."""
+        if isinstance(shape, Picture):
+            return self.picture(loc, shape)
+        element = self.element(loc + ("element",), shape.element)
+        area = self.area(loc, shape)
+        if element is None or area is None:
+            return None
+        return lambda cells: np.where(area(cells), element, -1)
+
+    def picture(self, loc: Loc, picture: Picture) -> Layer | None:
+        elements = [self.element(loc + ("legend", colour), ref) for colour, ref in picture.legend.items()]
+        world = self.world
+        box_width = picture.width or world.width - picture.x
+        box_height = picture.height or world.height - picture.y
+        if box_width < 1 or box_height < 1 or picture.x >= world.width or picture.y >= world.height:
+            self.note(loc, f"the picture's box lies outside the {world.width}x{world.height} world")
+            return None
+        folder = self.source.path.parent if self.source.path is not None else Path(".")
+        try:
+            rgba = read_rgba(folder / picture.file)
+            colours = [hex_rgb(c) for c in picture.legend]
+            indices = legend_indices(rgba, colours, nearest=picture.match == "nearest")
+        except PictureError as exc:
+            self.note(loc + ("file",), str(exc))
+            return None
+        if None in elements:
+            return None
+        lookup = np.array(elements + [-1], np.int64)  # index -1 (transparent) reads the last entry
+        painted = lookup[fit(indices, box_width, box_height)]
+        layer = np.full(world.cells.shape, -1, np.int64)
+        x0, y0 = max(picture.x, 0), max(picture.y, 0)
+        x1, y1 = min(picture.x + box_width, world.width), min(picture.y + box_height, world.height)
+        layer[y0:y1, x0:x1] = painted[y0 - picture.y : y1 - picture.y, x0 - picture.x : x1 - picture.x]
+        return lambda cells: layer
+
+    def switches(self, name: str | None) -> Switches:
+        """The timeline's start and stop events for the emitter or spray called ``name``."""
+        if name is None:
+            return ()
+        return tuple(
+            (event.frame, event.start is not None) for event in self.spec.timeline if name in (event.start, event.stop)
+        )
+
+    def burst(self, loc: Loc, burst: Burst, start: int, stop: int | None, rate: float, number: int, switches: Switches = ()):
+        """A spray (or a one-frame burst of particles), or None (problem noted)."""
+        x, y = burst.at
+        disc = CircleArea(shape="circle", x=x, y=y, radius=max(burst.radius, 0.5))
+        element = self.element(loc + ("element",), burst.element)
+        area = self.area(loc + ("at",), disc, "the start")
+        if element == 0:
+            self.note(loc + ("element",), "spray an element, not 'empty'")
+        if not element or area is None:
+            return None
+        ys, xs = np.nonzero(area(self.world.cells))
+        speeds = (burst.speed[0], burst.speed[1])
+        return Spray(ys, xs, element, burst.direction, burst.spread, speeds, rate, start, stop, number, switches)
+
+
 def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int | None = None) -> World:
-    """Paint ``spec``'s scene into a new world; ProblemsError names unknown elements and lost shapes."""
+    """Paint ``spec``'s scene into a new world and set up what runs over frames.
+
+    ProblemsError names unknown elements, shapes outside the world, unreadable
+    pictures and timeline events that name no emitter or spray.
+    """
     info = spec.world
     world = World(ruleset, info.width, info.height, info.seed if seed is None else seed, info.gravity)
-    problems: list[Problem] = []
-
-    def place(table: str, number: int, shape, field: tuple = (), what: str = "the shape") -> tuple[int, np.ndarray] | None:
-        """The element and the cells of a scene shape, emitter or spray, or None (problem noted)."""
-        mask = shape_mask(shape, world.cells)
-        if not mask.any():
-            outside = f"{what} lies outside the {info.width}x{info.height} world"
-            problems.append(source.problem((table, number) + field, outside))
-        try:
-            index = ruleset.index(shape.element)
-        except KeyError as exc:
-            problems.append(source.problem((table, number, "element"), exc.args[0]))
-            return None
-        return (index, mask) if mask.any() else None
-
+    build = _Builder(spec, ruleset, source, world)
     for number, shape in enumerate(spec.scene):  # in order: a fill sees what came before
-        placed = place("scene", number, shape)
-        if placed is not None:
-            world.paint(placed[1], placed[0])
-            if shape.temperature is not None:
-                world.set_temperature(placed[1], shape.temperature)
+        layer = build.layer(("scene", number), shape)
+        if layer is not None:
+            painted = world.paint_layer(layer(world.cells))
+            if getattr(shape, "temperature", None) is not None:
+                world.set_temperature(painted, shape.temperature)
+    _check_names(spec, build)
     for number, emitter in enumerate(spec.emitters):
-        placed = place("emitters", number, emitter)
-        if placed is not None:
-            ys, xs = np.nonzero(placed[1])
-            world.emitters.append(Emitter(ys, xs, placed[0], emitter.start, emitter.stop, emitter.chance))
-    for number, spray in enumerate(spec.sprays):
-        disc = Circle(shape="circle", element=spray.element, x=spray.at[0], y=spray.at[1], radius=max(spray.radius, 0.5))
-        placed = place("sprays", number, disc, ("at",), "the start")
-        if placed is not None and placed[0] == 0:
-            problems.append(source.problem(("sprays", number, "element"), "spray an element, not 'empty'"))
-        elif placed is not None:
-            ys, xs = np.nonzero(placed[1])
-            world.sprays.append(
-                Spray(ys, xs, placed[0], spray.direction, spray.spread, tuple(spray.speed), spray.rate, spray.start, spray.stop, number)
+        element = build.element(("emitters", number, "element"), emitter.element)
+        area = build.area(("emitters", number), emitter)
+        if element is not None and area is not None:
+            ys, xs = np.nonzero(area(world.cells))
+            world.emitters.append(
+                Emitter(ys, xs, element, emitter.start, emitter.stop, emitter.chance, build.switches(emitter.name))
             )
-    for number, blast in enumerate(spec.explosions):
+    for number, spray in enumerate(spec.sprays):
+        made = build.burst(("sprays", number), spray, spray.start, spray.stop, spray.rate, number, build.switches(spray.name))
+        if made is not None:
+            world.sprays.append(made)
+    blasts = [(("explosions", number), blast, blast.frame) for number, blast in enumerate(spec.explosions)]
+    for number, event in enumerate(spec.timeline):
+        loc = ("timeline", number, event.action)
+        if event.paint is not None or event.erase is not None:
+            erase = event.erase is not None
+            layer = build.area(loc, event.erase) if erase else build.layer(loc, event.paint)
+            if layer is not None:
+                if erase:
+                    layer = (lambda area: lambda cells: np.where(area(cells), 0, -1))(layer)
+                celsius = None if erase else getattr(event.paint, "temperature", None)
+                world.paintings.append(Painting(event.frame, layer, celsius, number))
+        elif event.heat is not None:
+            area = build.area(loc, event.heat)
+            if area is not None:
+                world.heaters.append(Heater(area, event.heat.temperature, event.frame, event.frame + event.heat.frames))
+        elif event.spawn is not None:
+            count = event.spawn.count
+            made = build.burst(loc, event.spawn, event.frame, event.frame + 1, count, len(spec.sprays) + number)
+            if made is not None:
+                world.sprays.append(made)
+        elif event.explode is not None:
+            blasts.append((loc, event.explode, event.frame))
+    for loc, blast, frame in blasts:
         x, y = blast.at
         if not (0 <= x < info.width and 0 <= y < info.height):
-            problems.append(source.problem(("explosions", number, "at"), f"the centre lies outside the {info.width}x{info.height} world"))
+            build.note(loc + ("at",), f"the centre lies outside the {info.width}x{info.height} world")
             continue
         try:
-            world.scheduled.append((blast.frame, world.blast_row(x, y, blast)))
+            world.scheduled.append((frame, world.blast_row(x, y, blast)))
         except KeyError as exc:
-            problems.append(source.problem(("explosions", number, "leaves"), exc.args[0]))
-    if problems:
-        raise ProblemsError(problems)
+            build.note(loc + ("leaves",), exc.args[0])
+    world.scheduled.sort(key=lambda scheduled: scheduled[0])  # stable: same frame, in the file's order
+    if build.problems:
+        raise ProblemsError(build.problems)
     return world
+
+
+def _check_names(spec: WorldFile, build: _Builder) -> None:
+    """Names of emitters and sprays are unique, and every start and stop event names one."""
+    named: dict[str, Loc] = {}
+    for table, sources in (("emitters", spec.emitters), ("sprays", spec.sprays)):
+        for number, source in enumerate(sources):
+            if source.name is None:
+                continue
+            if source.name in named:
+                build.note((table, number, "name"), f"'{source.name}' names another emitter or spray too")
+            named.setdefault(source.name, (table, number, "name"))
+    for number, event in enumerate(spec.timeline):
+        for action in ("start", "stop"):
+            name = getattr(event, action)
+            if name is not None and name not in named:
+                known = ", ".join(sorted(named)) or "none has a name"
+                build.note(("timeline", number, action), f"no emitter or spray is called '{name}' (named: {known})")

@@ -37,12 +37,19 @@ def brush_offsets(diameter: int) -> list[tuple[int, int]]:
 
 def line_mask(width: int, height: int, start: tuple[int, int], end: tuple[int, int], thickness: int) -> np.ndarray:
     """A brush of diameter ``thickness`` dragged along the line traversal from start to end."""
+    return stroke_mask(width, height, [start, end], thickness)
+
+
+def stroke_mask(width: int, height: int, points, thickness: int) -> np.ndarray:
+    """A brush of diameter ``thickness`` dragged along the line traversal from each point to the next."""
     mask = np.zeros((height, width), bool)
-    for x, y in line_cells(*start, *end):
-        for ox, oy in brush_offsets(thickness):
-            px, py = x + ox, y + oy
-            if 0 <= px < width and 0 <= py < height:
-                mask[py, px] = True
+    offsets = brush_offsets(thickness)
+    for (x0, y0), (x1, y1) in zip(points, points[1:]):
+        for x, y in line_cells(x0, y0, x1, y1):
+            for ox, oy in offsets:
+                px, py = x + ox, y + oy
+                if 0 <= px < width and 0 <= py < height:
+                    mask[py, px] = True
     return mask
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -38,6 +38,7 @@ from .hashing import (
     SALT_SPAWN,
     SALT_SPRAY,
     SALT_BLAST,
+    SALT_TIMELINE,
     cell_hash,
     chance_threshold,
     frame_key,
@@ -68,9 +69,19 @@ REACH = MAX_SPEED + 1
 assert 2 * (REACH + WAKE_MARGIN) < TILE, "tiles of one pass must not reach each other's chunks"
 
 
-def _on(start: int, stop: int | None, frame: int) -> bool:
-    """Is a source that runs from ``start`` until before ``stop`` (never ending if None) on at ``frame``?"""
-    return start <= frame and (stop is None or frame < stop)
+Switches = tuple[tuple[int, bool], ...]  # (frame, on) pairs from a timeline's start and stop events
+
+
+def _on(start: int, stop: int | None, frame: int, switches: Switches = ()) -> bool:
+    """Is a source on at ``frame``? It runs from ``start`` until before ``stop`` (never ending if
+    None), and each (frame, on) switch turns it on or off from that frame; a switch on the
+    same frame as ``start`` or ``stop`` comes after them."""
+    own = [(start, True)] + ([] if stop is None else [(stop, False)])
+    on = False
+    for at, turn_on in sorted(own + list(switches), key=lambda switch: switch[0]):  # stable: own first
+        if at <= frame:
+            on = turn_on
+    return on
 
 
 class State(NamedTuple):
@@ -96,9 +107,10 @@ class Emitter:
     start: int
     stop: int | None
     chance: float
+    switches: Switches = ()
 
     def active(self, frame: int) -> bool:
-        return _on(self.start, self.stop, frame)
+        return _on(self.start, self.stop, frame, self.switches)
 
 
 @dataclass(frozen=True)
@@ -119,9 +131,10 @@ class Spray:
     start: int
     stop: int | None
     number: int  # which spray of the world, for independent randomness
+    switches: Switches = ()
 
     def active(self, frame: int) -> bool:
-        return _on(self.start, self.stop, frame)
+        return _on(self.start, self.stop, frame, self.switches)
 
     def shots(self, seed: int, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The cells and velocities (cells/frame) of this frame's particles, cells possibly repeated."""
@@ -135,6 +148,33 @@ class Spray:
         vx = np.array([s * math.cos(a) for a, s in zip(angles, speeds)])
         vy = np.array([-s * math.sin(a) for a, s in zip(angles, speeds)])
         return self.ys[picks], self.xs[picks], vx, vy
+
+
+@dataclass(frozen=True)
+class Painting:
+    """A timeline event that paints (or erases) on its frame, before the step.
+
+    ``layer`` gives, for the world's cells at that moment, the element each
+    cell becomes (-1: left alone); a fill needs to see the world as it is then.
+    """
+
+    frame: int
+    layer: Callable[[np.ndarray], np.ndarray]
+    celsius: float | None  # painted cells' temperature (None: each element's own)
+    number: int  # which event of the timeline, for independent randomness
+
+
+@dataclass(frozen=True)
+class Heater:
+    """Sets the cells ``area`` gives to ``celsius`` degrees before each step from ``start`` until before ``stop``."""
+
+    area: Callable[[np.ndarray], np.ndarray]  # the world's cells -> a boolean mask
+    celsius: float
+    start: int
+    stop: int
+
+    def active(self, frame: int) -> bool:
+        return self.start <= frame < self.stop
 
 
 class World:
@@ -164,6 +204,8 @@ class World:
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
+        self.paintings: list[Painting] = []
+        self.heaters: list[Heater] = []
         self.paint(np.ones((height, width), bool), 0)  # empty, with its own shades
 
     @property
@@ -175,6 +217,13 @@ class World:
         """Set the cells of ``mask`` to ``element`` as newly born cells; returns how many changed."""
         ys, xs = np.nonzero(mask)
         return self.paint_cells(ys, xs, element, chance=chance, only_empty=only_empty, salt=salt)
+
+    def paint_layer(self, layer: np.ndarray, *, salt: int = SALT_PAINT) -> np.ndarray:
+        """Paint each cell with the element ``layer`` gives (-1: left alone); returns the painted mask."""
+        mask = layer >= 0
+        for element in np.unique(layer[mask]):
+            self.paint(layer == element, int(element), salt=salt)
+        return mask
 
     def paint_cells(
         self, ys: np.ndarray, xs: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT
@@ -311,7 +360,8 @@ class World:
         explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake)
 
     def step(self) -> None:
-        """Advance one frame: emitters pour, sprays shoot, the kernel updates every cell, explosions go off."""
+        """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
+        the kernel updates every cell, explosions go off."""
         from numba import get_num_threads
 
         from .kernel import step, take_detonations
@@ -325,6 +375,14 @@ class World:
             if spray.active(self.frame):
                 ys, xs, vx, vy = spray.shots(self.seed, self.frame)
                 self.spawn_particles(ys, xs, spray.element, vx, vy)
+        for painting in self.paintings:
+            if painting.frame == self.frame:
+                painted = self.paint_layer(painting.layer(self.cells), salt=SALT_TIMELINE + painting.number)
+                if painting.celsius is not None:
+                    self.set_temperature(painted, painting.celsius)
+        for heater in self.heaters:
+            if heater.active(self.frame):
+                self.set_temperature(heater.area(self.cells), heater.celsius)
         went_off = step(
             self.state,
             self.tables,
@@ -359,8 +417,8 @@ class World:
         s = self.state
         return np.where(s.carry != 0, s.carry, s.cells)
 
-    def image(self, scale: int = 1) -> np.ndarray:
-        """Palette indices of every cell, each cell a ``scale`` x ``scale`` block.
+    def image(self) -> np.ndarray:
+        """Palette indices of every cell, (height, width).
 
         A cell shows its element's colour in its own shade; scorched cells are
         darker, and cells hotter than the glow point glow red, orange, then yellow.
@@ -379,6 +437,4 @@ class World:
             if hot.any():
                 level = np.minimum((units[hot] - start[hot]) // temperature_units(GLOW_STEP), len(GLOW_COLOURS) - 1)
                 frame[hot] = looks.glow[shown[hot], level]
-        if scale > 1:
-            frame = np.repeat(np.repeat(frame, scale, axis=0), scale, axis=1)
         return frame

@@ -57,7 +57,7 @@ from typing import Annotated, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
-from .modspec import ELEMENT_REF, MAX_SPEED, Explosion, ModName, Temperature
+from .modspec import ELEMENT_REF, MAX_SPEED, Explosion, HexColor, ModName, Temperature
 
 #: Largest width or height (the kernel's cell hash packs x and y in 16 and 15 bits).
 MAX_SIZE = 16384
@@ -95,14 +95,7 @@ class WorldInfo(_Strict):
     )
 
 
-class _Shape(_Strict):
-    element: ElementRef = Field(description="The element to paint ('empty' erases).")
-    temperature: Temperature | None = Field(
-        None, description="Degrees Celsius of the painted cells (default: the element's own)."
-    )
-
-
-class Rect(_Shape):
+class RectArea(_Strict):
     """An axis-aligned rectangle."""
 
     shape: Literal["rect"]
@@ -112,7 +105,7 @@ class Rect(_Shape):
     height: int = Field(ge=1, description="Height in cells.")
 
 
-class Circle(_Shape):
+class CircleArea(_Strict):
     """A filled disc."""
 
     shape: Literal["circle"]
@@ -121,7 +114,7 @@ class Circle(_Shape):
     radius: float = Field(gt=0, le=MAX_SIZE, description="Radius in cells.")
 
 
-class Line(_Shape):
+class LineArea(_Strict):
     """A straight stroke, drawn with the line traversal."""
 
     shape: Literal["line"]
@@ -130,17 +123,77 @@ class Line(_Shape):
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
 
 
-class Fill(_Shape):
-    """A paint bucket: the region connected to ``at`` that holds the same element as ``at``."""
+class StrokeArea(_Strict):
+    """A brush stroke along a polyline: the line traversal from each point to the next, no gaps."""
+
+    shape: Literal["stroke"]
+    points: list[Point] = Field(min_length=2, max_length=4096, description="The corners, [[x, y], ...], in order.")
+    thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
+
+
+class FillArea(_Strict):
+    """A paint bucket: the region connected to ``at`` that holds the same element as ``at`` (when it is painted)."""
 
     shape: Literal["fill"]
     at: Point = Field(description="A cell of the region to fill, [x, y].")
 
 
-Shape = Annotated[Union[Rect, Circle, Line, Fill], Field(discriminator="shape")]
+Area = Annotated[Union[RectArea, CircleArea, LineArea, StrokeArea, FillArea], Field(discriminator="shape")]
+
+
+class _Paint(_Strict):
+    element: ElementRef = Field(description="The element to paint ('empty' erases).")
+    temperature: Temperature | None = Field(
+        None, description="Degrees Celsius of the painted cells (default: the element's own)."
+    )
+
+
+class Rect(RectArea, _Paint):
+    """A rectangle of an element."""
+
+
+class Circle(CircleArea, _Paint):
+    """A disc of an element."""
+
+
+class Line(LineArea, _Paint):
+    """A straight line of an element."""
+
+
+class Stroke(StrokeArea, _Paint):
+    """A polyline of an element."""
+
+
+class Fill(FillArea, _Paint):
+    """A connected region filled with an element."""
+
+
+class Picture(_Strict):
+    """A PNG (or any image pillow reads) painted cell by cell: each pixel's colour picks an element by the legend.
+
+    The picture is scaled (nearest neighbour) to cover the box at (x, y),
+    by default the whole world. Transparent pixels leave their cells alone.
+    """
+
+    shape: Literal["image"]
+    file: str = Field(min_length=1, description="The image, relative to the world file.")
+    legend: dict[HexColor, ElementRef] = Field(
+        min_length=1, description="Which element each colour paints: {'#rrggbb' = 'element'}; 'empty' clears."
+    )
+    match: Literal["exact", "nearest"] = Field(
+        "exact", description="'exact': every colour must be in the legend; 'nearest': the closest legend colour."
+    )
+    x: int = Field(0, description="Left column of the box the picture covers.")
+    y: int = Field(0, description="Top row of the box.")
+    width: int | None = Field(None, ge=1, le=MAX_SIZE, description="Width of the box in cells (default: to the right edge).")
+    height: int | None = Field(None, ge=1, le=MAX_SIZE, description="Height of the box in cells (default: to the bottom).")
+
+
+Shape = Annotated[Union[Rect, Circle, Line, Stroke, Fill, Picture], Field(discriminator="shape")]
 
 
 class _Timed(_Strict):
+    name: str | None = Field(None, pattern=r"^[A-Za-z0-9_-]+$", description="A name the timeline can start and stop it by.")
     start: int = Field(0, ge=0, description="First frame it is on.")
     stop: int | None = Field(None, ge=1, description="It stops before this frame (never, if left out).")
 
@@ -169,7 +222,11 @@ class LineEmitter(Line, _Emitting):
     """Pours along a stroke."""
 
 
-Emitter = Annotated[Union[RectEmitter, CircleEmitter, LineEmitter], Field(discriminator="shape")]
+class StrokeEmitter(Stroke, _Emitting):
+    """Pours along a polyline."""
+
+
+Emitter = Annotated[Union[RectEmitter, CircleEmitter, LineEmitter, StrokeEmitter], Field(discriminator="shape")]
 
 
 Speed = Annotated[float, Field(gt=0, le=MAX_SPEED)]
@@ -179,13 +236,7 @@ def _as_range(value: object) -> object:
     return [value, value] if isinstance(value, (int, float)) else value
 
 
-class Spray(_Timed):
-    """Shoots particles from around a point: a fountain, a hose, a shower of sparks.
-
-    A particle element flies as itself; any other element flies as
-    ``base:particle`` carrying it, and lands as that element.
-    """
-
+class _Shooting(_Strict):
     element: ElementRef = Field(description="What flies: a particle element, or any element to carry.")
     at: Point = Field(description="Where particles start, [x, y].")
     radius: float = Field(0, ge=0, le=64, description="They start from empty cells within this distance of 'at'.")
@@ -194,9 +245,6 @@ class Spray(_Timed):
     speed: Annotated[list[Speed], BeforeValidator(_as_range), Field(min_length=2, max_length=2)] = Field(
         description=f"Cells per frame (at most {MAX_SPEED}), or [slowest, fastest].",
         json_schema_extra={"anyOf": [{"type": "number"}, {"type": "array"}]},
-    )
-    rate: float = Field(
-        1.0, gt=0, le=256, description="Particles per frame (a fraction: on average); at most one per free start cell."
     )
 
     @field_validator("speed")
@@ -207,12 +255,101 @@ class Spray(_Timed):
         return speed
 
 
-class ScheduledExplosion(Explosion):
-    """An explosion the world sets off at a frame and place (after that frame's step)."""
+class Spray(_Shooting, _Timed):
+    """Shoots particles from around a point: a fountain, a hose, a shower of sparks.
+
+    A particle element flies as itself; any other element flies as
+    ``base:particle`` carrying it, and lands as that element.
+    """
+
+    rate: float = Field(
+        1.0, gt=0, le=256, description="Particles per frame (a fraction: on average); at most one per free start cell."
+    )
+
+
+class Burst(_Shooting):
+    """Particles shot all at once (a timeline event's ``spawn``)."""
+
+    count: int = Field(1, ge=1, le=256, description="How many; at most one per free start cell.")
+
+
+class Blast(Explosion):
+    """An explosion at a place."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
-    frame: int = Field(ge=0, description="The frame it goes off on.")
     at: Point = Field(description="Its centre, [x, y].")
+
+
+class ScheduledExplosion(Blast):
+    """An explosion the world sets off at a frame and place (after that frame's step)."""
+
+    frame: int = Field(ge=0, description="The frame it goes off on.")
+
+
+def _no_element(value: object) -> object:
+    if isinstance(value, dict) and "element" in value:
+        raise ValueError("'erase' empties its cells; leave 'element' out (or 'paint' with it)")
+    return value
+
+
+class _Heating(_Strict):
+    temperature: Temperature = Field(description="Degrees Celsius the cells are set to, whatever they hold.")
+    frames: int = Field(1, ge=1, le=100000, description="For how many frames, from the event's on (a heat source).")
+
+
+class RectHeat(RectArea, _Heating):
+    """Heats a rectangle."""
+
+
+class CircleHeat(CircleArea, _Heating):
+    """Heats a disc."""
+
+
+class LineHeat(LineArea, _Heating):
+    """Heats a line."""
+
+
+class StrokeHeat(StrokeArea, _Heating):
+    """Heats a polyline."""
+
+
+class FillHeat(FillArea, _Heating):
+    """Heats a connected region."""
+
+
+Heat = Annotated[Union[RectHeat, CircleHeat, LineHeat, StrokeHeat, FillHeat], Field(discriminator="shape")]
+
+#: What a timeline event may do; each event does exactly one.
+ACTIONS = ("paint", "erase", "heat", "start", "stop", "spawn", "explode")
+
+
+class Event(_Strict):
+    """Something that happens at a frame: give ``frame`` and exactly one action.
+
+    Paint, erase, heat, start, stop and spawn happen before the frame's step;
+    an explosion goes off after it (as ``[[explosions]]`` do).
+    """
+
+    frame: int = Field(ge=0, le=1_000_000, description="The frame it happens on.")
+    paint: Shape | None = Field(None, description="Paint a shape (rect, circle, line, stroke, fill or image).")
+    erase: Annotated[Area | None, BeforeValidator(_no_element)] = Field(None, description="Empty the cells of a shape.")
+    heat: Heat | None = Field(None, description="Set the cells of a shape to a temperature, for 'frames' frames.")
+    start: str | None = Field(None, description="Start the named emitter or spray.")
+    stop: str | None = Field(None, description="Stop the named emitter or spray.")
+    spawn: Burst | None = Field(None, description="Shoot particles at once.")
+    explode: Blast | None = Field(None, description="Set off an explosion.")
+
+    @model_validator(mode="after")
+    def _one_action(self):
+        given = [name for name in ACTIONS if getattr(self, name) is not None]
+        if len(given) != 1:
+            raise ValueError(f"give exactly one of {', '.join(ACTIONS)} (got {', '.join(given) or 'none'})")
+        return self
+
+    @property
+    def action(self) -> str:
+        """The name of what it does."""
+        return next(name for name in ACTIONS if getattr(self, name) is not None)
 
 
 class RenderSettings(_Strict):
@@ -221,7 +358,14 @@ class RenderSettings(_Strict):
     frames: int = Field(300, ge=1, le=100000, description="Frames to simulate.")
     every: int = Field(2, ge=1, le=1000, description="Frames simulated per image written.")
     scale: int = Field(3, ge=1, le=16, description="Pixels per cell (nearest neighbour).")
-    fps: float = Field(25, gt=0, le=50, description="Images per second when played back.")
+    fps: float = Field(25, gt=0, le=50, description="Images per second when played back (GIF: delays of at least 20 ms).")
+    loop: int = Field(0, ge=0, le=65535, description="Times the animation plays in all; 0 = forever.")
+    crop: list[int] | None = Field(
+        None, min_length=4, max_length=4, description="Record only this region of cells: [x, y, width, height]."
+    )
+    format: str | None = Field(
+        None, min_length=1, description="Output format (gif, apng, webp, png-frames, ...); default: by the output's extension."
+    )
     output: str | None = Field(
         None, min_length=1, description="Output file, relative to the world file; default: WORLD_NAME.gif here."
     )
@@ -235,4 +379,5 @@ class WorldFile(_Strict):
     emitters: list[Emitter] = Field(default_factory=list, description="Shapes that pour an element over frames.")
     sprays: list[Spray] = Field(default_factory=list, description="Sources of flying particles.")
     explosions: list[ScheduledExplosion] = Field(default_factory=list, description="Blasts at given frames and places.")
+    timeline: list[Event] = Field(default_factory=list, description="Events at given frames: paint, erase, heat, start, stop, spawn, explode.")
     render: RenderSettings = Field(default_factory=RenderSettings, description="How 'sandmod render' records.")

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from sandmod.hooks import hookimpl
-from sandmod.recording import RecorderSpec, VideoSettings
+from sandmod.recording import RecorderSpec, VideoSettings, palette_image
 
 #: Browsers slow down GIF frames shorter than 20 ms, and delays are in 10 ms steps.
 MIN_DELAY_MS = 20
@@ -35,38 +35,39 @@ def distinct_colours(palette: bytes) -> bytes:
     return bytes(out)
 
 
+def gif_delay_ms(fps: float) -> int:
+    """The delay GIF stores for ``fps``: whole 10 ms steps, at least MIN_DELAY_MS."""
+    return max(MIN_DELAY_MS, int(round(1000 / fps / 10)) * 10)
+
+
 class GifRecorder:
     """Collects palette frames and writes them as one animated GIF."""
 
     def __init__(self, path: Path, settings: VideoSettings):
-        from PIL import Image
-
-        self._image = Image
         self._path = path
         self._palette = distinct_colours(settings.palette)
         self._settings = settings
         self._frames: list = []
 
     def add_frame(self, frame: np.ndarray) -> None:
-        image = self._image.fromarray(np.ascontiguousarray(frame, dtype=np.uint8), mode="P")
-        image.putpalette(self._palette)
-        self._frames.append(image)
+        self._frames.append(palette_image(frame, self._palette))
 
     def close(self) -> None:
         if not self._frames:
             raise ValueError("no frames to write")
-        delay = max(MIN_DELAY_MS, int(round(1000 / self._settings.fps / 10)) * 10)
         first, *rest = self._frames
+        plays = self._settings.loop
+        looping = {} if plays == 1 else {"loop": max(plays - 1, 0)}  # GIF counts repeats; none: play once
         first.save(
             self._path,
             format="GIF",
             save_all=True,
             append_images=rest,
-            duration=delay,
-            loop=self._settings.loop,
+            duration=gif_delay_ms(self._settings.fps),
             palette=self._palette,  # one global colour table, no table per frame
             optimize=False,
             disposal=1,
+            **looping,
         )
         self._frames.clear()
 

@@ -120,7 +120,7 @@ def test_bad_world_is_one_line_per_problem_exit_2_and_no_file():
     assert result.exit_code == 2
     assert result.stderr.splitlines() == [
         "bad.toml:4:1: world.height: must be >= 4 (got 0)",
-        "bad.toml:7:1: scene.0.shape: must be one of 'rect', 'circle', 'line', 'fill' (got 'blob')",
+        "bad.toml:7:1: scene.0.shape: must be one of 'rect', 'circle', 'line', 'stroke', 'fill', 'image' (got 'blob')",
     ]
     assert "Traceback" not in result.output
     assert not list(Path(".").glob("*.gif*")) and not list(Path(".").glob(".bad.gif*"))
@@ -141,7 +141,15 @@ def test_unknown_mod_and_output_format():
     Path("w.toml").write_text("[world]\nwidth = 10\nheight = 10\n")
     result = invoke("render", "w.toml", "-o", "w.mp4")
     assert result.exit_code == 2
-    assert result.stderr.strip() == "w.mp4: no recorder writes '.mp4' files (known: .gif)"
+    assert result.stderr.strip() == (
+        "w.mp4: no recorder writes '.mp4' files (known: apng (.apng, .png), gif (.gif), "
+        "png-frames (a folder), webp (.webp)); or give --format"
+    )
+    result = invoke("render", "w.toml", "--format", "mp4")
+    assert result.exit_code == 2 and "Invalid value for '--format': unknown format 'mp4' (known: apng" in result.stderr
+    Path("w.toml").write_text('[world]\nwidth = 10\nheight = 10\n[render]\nformat = "flv"\n')
+    result = invoke("render", "w.toml")
+    assert result.exit_code == 2 and result.stderr.startswith("w.toml:5:1: render.format: unknown format 'flv' (known: apng")
 
 
 def test_missing_world_file():

@@ -51,9 +51,9 @@ def run(site: Path, *args: str, disable: str = "", cwd: Path | None = None) -> s
 def test_the_installed_package_is_loaded_and_can_be_blocked(site):
     loaded = run(site, "-c", PROBE)
     assert loaded.returncode == 0, loaded.stderr
-    assert loaded.stdout.strip() == "['ascii', 'gif'] ['ascii', 'sandmod.plugins.toml_mods']"
+    assert loaded.stdout.strip() == "['apng', 'ascii', 'gif', 'png-frames', 'webp'] ['ascii', 'sandmod.plugins.toml_mods']"
     blocked = run(site, "-c", PROBE, disable="ascii")
-    assert blocked.stdout.strip() == "['gif'] ['sandmod.plugins.toml_mods']"
+    assert blocked.stdout.strip() == "['apng', 'gif', 'png-frames', 'webp'] ['sandmod.plugins.toml_mods']"
 
 
 def test_its_mod_tests_pass_and_its_recorder_writes(site, tmp_path):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import time
@@ -49,51 +50,127 @@ _mods_option = click.option(
 
 @cli.command()
 @click.argument("world", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Output file (default: WORLD.gif here).")
+@click.option("-o", "--output", type=click.Path(path_type=Path), help="Output file, or folder for png-frames (default: WORLD.gif here).")
+@click.option("--format", "format_name", help="Output format: gif, apng, webp, png-frames, or a plugin's (default: by the output's extension).")
 @click.option("--frames", type=click.IntRange(1, 100000), help="Frames to simulate.")
 @click.option("--every", type=click.IntRange(1, 1000), help="Frames simulated per image.")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed (overrides the world's).")
-@click.option("--scale", type=click.IntRange(1, 16), help="Pixels per cell.")
-@click.option("--fps", type=click.FloatRange(0, 50, min_open=True), help="Images per second.")
+@click.option("--scale", type=click.IntRange(1, 16), help="Pixels per cell (nearest neighbour).")
+@click.option("--fps", type=click.FloatRange(0, 50, min_open=True), help="Images per second (GIF: delays of at least 20 ms).")
+@click.option("--loop", type=click.IntRange(0, 65535), help="Times the animation plays; 0 = forever.")
+@click.option("--crop", type=(int, int, int, int), metavar="X Y W H", help="Record only this region of cells.")
+@click.option("--still", type=click.Path(dir_okay=False, path_type=Path), help="Also write the last image as a PNG.")
+@click.option("--save-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Save the final state to an .npz file.")
+@click.option("--from-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Start from a saved state (and its frame and seed).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 @_mods_option
-def render(world, output, frames, every, seed, scale, fps, quiet, mod_dirs) -> None:
+def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, quiet, mod_dirs) -> None:
     """Simulate WORLD (a world .toml file) and write an animation."""
+    from sandmod import kernelcache
     from sandmod.loading import load_world
+    from sandmod.render import Framing
     from sandmod.render import render as run
 
-    from sandmod import kernelcache
-
     loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
-    for warning in loaded.warnings:
+    warnings = [str(w) for w in loaded.warnings]
+    if from_snapshot is not None:
+        from sandmod.snapshots import load_snapshot
+
+        warnings += [f"{display_path(from_snapshot)}: {w}" for w in load_snapshot(loaded.world, from_snapshot)]
+        if seed is not None:
+            loaded.world.seed = seed
+    for warning in warnings:
         click.echo(f"warning: {warning}", err=True)
     settings = loaded.spec.render
-    if output is None:
-        output = world.parent / settings.output if settings.output else Path(f"{world.stem}.gif")
-    recorder = loaded.registry.recorder_for(output)
-    if recorder is None:
-        known = ", ".join(sorted(ext for r in loaded.registry.recorders.values() for ext in r.value.extensions))
-        raise ProblemsError([Problem(display_path(output), None, "", f"no recorder writes '{output.suffix}' files (known: {known})")])
+    recorder, output = _recorder_and_output(loaded, world, output, format_name)
+    framing = Framing(scale or settings.scale, _crop(loaded, crop))
     frames = frames or settings.frames
     if not kernelcache.is_compiled() and not quiet:
         click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
     started = time.perf_counter()
-    options = dict(frames=frames, every=every or settings.every, scale=scale or settings.scale, fps=fps or settings.fps)
-    try:
+    options = dict(
+        frames=frames,
+        every=every or settings.every,
+        framing=framing,
+        fps=fps or settings.fps,
+        loop=settings.loop if loop is None else loop,
+        still=still,
+    )
+    with _writing(output):
         if quiet or not sys.stderr.isatty():
             result = run(loaded.world, recorder, output, **options)
         else:
             with click.progressbar(length=frames, label=f"{world.name}", file=sys.stderr) as bar:
                 result = run(loaded.world, recorder, output, progress=bar.update, **options)
-    except OSError as exc:
-        raise ProblemsError([Problem(display_path(output), None, "", f"cannot write: {exc.strerror or exc}")]) from None
+    if save_snapshot is not None:
+        from sandmod.snapshots import save_snapshot as save
+
+        with _writing(save_snapshot):
+            save(loaded.world, save_snapshot)
     kernelcache.mark_compiled()
     if not quiet:
-        size = output.stat().st_size
+        extras = "".join(f", {what} {display_path(path)}" for what, path in (("still", still), ("snapshot", save_snapshot)) if path)
         click.echo(
             f"wrote {display_path(output)}: {result.images} images of {result.width}x{result.height} "
-            f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({size / 1e6:.2f} MB)"
+            f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({_size(output) / 1e6:.2f} MB){extras}"
         )
+
+
+@contextlib.contextmanager
+def _writing(path: Path):
+    """Turn a failure to write ``path`` (a full disk, a folder in the way) into a problem naming it."""
+    try:
+        yield
+    except OSError as exc:
+        raise ProblemsError([Problem(display_path(path), None, "", f"cannot write: {exc.strerror or exc}")]) from None
+
+
+def _size(path: Path) -> int:
+    """Bytes of a file, or of all files in a folder."""
+    return sum(p.stat().st_size for p in path.iterdir()) if path.is_dir() else path.stat().st_size
+
+
+def _recorder_and_output(loaded, world: Path, output: Path | None, format_name: str | None):
+    """The recorder (by --format, the world's render.format, or the output's extension) and the output path."""
+    settings, registry = loaded.spec.render, loaded.registry
+    name = format_name or settings.format
+    if name is not None:
+        entry = registry.recorders.get(name)
+        if entry is None:
+            message = f"unknown format '{name}' (known: {registry.recorder_choices()})"
+            if format_name is None:
+                raise ProblemsError([loaded.source.problem(("render", "format"), message)])
+            raise click.BadParameter(message, param_hint="'--format'")
+        recorder = entry.value
+    if output is None:
+        if settings.output:
+            output = world.parent / settings.output
+        elif name is not None:
+            output = Path(f"{world.stem}{recorder.extensions[0]}" if recorder.extensions else f"{world.stem}_frames")
+        else:
+            output = Path(f"{world.stem}.gif")
+    if name is None:
+        recorder = registry.recorder_for(output)
+        if recorder is None:
+            message = f"no recorder writes '{output.suffix}' files (known: {registry.recorder_choices()}); or give --format"
+            raise ProblemsError([Problem(display_path(output), None, "", message)])
+    return recorder, output
+
+
+def _crop(loaded, crop: tuple[int, int, int, int] | None):
+    """The crop region from --crop or the world's render.crop, checked against the world."""
+    from sandmod.render import Crop
+
+    given = crop or loaded.spec.render.crop
+    if given is None:
+        return None
+    region, world = Crop(*given), loaded.world
+    if not region.fits(world.width, world.height):
+        message = f"[x, y, width, height] = {list(region)} must lie inside the {world.width}x{world.height} world"
+        if crop is None:
+            raise ProblemsError([loaded.source.problem(("render", "crop"), message)])
+        raise click.BadParameter(message, param_hint="'--crop'")
+    return region
 
 
 @cli.command("list")
