@@ -137,12 +137,13 @@ class Spray:
         return _on(self.start, self.stop, frame, self.switches)
 
     def shots(self, seed: int, frame: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The cells and velocities (cells/frame) of this frame's particles, cells possibly repeated."""
+        """The cells and velocities (cells/frame) of this frame's particles, each from a different cell."""
         key = frame_key(seed, frame, SALT_SPRAY + self.number)
         whole = int(self.rate)
         count = whole + (int(mix32(key) >> (32 - ROLL_BITS)) < chance_threshold(self.rate - whole))
-        rolls = [[mix32(key ^ mix32(j * 3 + part + 1)) / 2**32 for part in range(3)] for j in range(count)]
-        picks = np.array([int(r[0] * len(self.xs)) for r in rolls], np.int64)
+        order = cell_hash(key, self.xs.astype(np.uint64), self.ys.astype(np.uint64))
+        picks = np.argsort(order, kind="stable")[:count]  # distinct cells, in a hashed order
+        rolls = [[mix32(key ^ mix32(j * 3 + part + 1)) / 2**32 for part in range(3)] for j in range(len(picks))]
         angles = [math.radians(self.direction + (r[1] - 0.5) * self.spread) for r in rolls]
         speeds = [self.speeds[0] + r[2] * (self.speeds[1] - self.speeds[0]) for r in rolls]
         vx = np.array([s * math.cos(a) for a, s in zip(angles, speeds)])
