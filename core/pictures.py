@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import display_path
+
 #: Pixels less opaque than this are transparent: they leave their cells alone.
 OPAQUE = 128
 #: Unknown colours named in one error, at most.
@@ -29,11 +31,11 @@ def read_rgba(path: Path) -> np.ndarray:
         with Image.open(path) as image:
             return np.asarray(image.convert("RGBA"))
     except FileNotFoundError:
-        raise PictureError(f"no such image: {path}") from None
+        raise PictureError(f"no such image: {display_path(path)}") from None
     except UnidentifiedImageError:
-        raise PictureError(f"not an image pillow can read: {path}") from None
+        raise PictureError(f"not an image pillow can read: {display_path(path)}") from None
     except OSError as exc:
-        raise PictureError(f"cannot read image {path}: {exc}") from None
+        raise PictureError(f"cannot read image {display_path(path)}: {exc}") from None
 
 
 def legend_indices(rgba: np.ndarray, colours: list[tuple[int, int, int]], *, nearest: bool) -> np.ndarray:
@@ -46,7 +48,7 @@ def legend_indices(rgba: np.ndarray, colours: list[tuple[int, int, int]], *, nea
     height, width = rgba.shape[:2]
     packed = (rgba[..., 0].astype(np.int64) << 16) | (rgba[..., 1].astype(np.int64) << 8) | rgba[..., 2]
     opaque = rgba[..., 3] >= OPAQUE
-    found, inverse = np.unique(np.where(opaque, packed, -1), return_inverse=True)
+    found, first, inverse = np.unique(np.where(opaque, packed, -1), return_index=True, return_inverse=True)
     inverse = inverse.reshape(height, width)
     legend = np.array([(r << 16) | (g << 8) | b for r, g, b in colours], np.int64)
     if nearest:
@@ -59,17 +61,18 @@ def legend_indices(rgba: np.ndarray, colours: list[tuple[int, int, int]], *, nea
         pick = np.where(match.any(axis=1), match.argmax(axis=1), -2)
         missing = [i for i in range(len(found)) if pick[i] == -2 and found[i] >= 0]
         if missing:
-            raise PictureError(_unknown_colours(found, inverse, missing))
+            raise PictureError(_unknown_colours(found, first, inverse, missing, width))
     pick = np.where(found < 0, -1, pick)
     return pick[inverse]
 
 
-def _unknown_colours(found: np.ndarray, inverse: np.ndarray, missing: list[int]) -> str:
+def _unknown_colours(found: np.ndarray, first: np.ndarray, inverse: np.ndarray, missing: list[int], width: int) -> str:
+    """The commonest unknown colours (then in reading order), each with its count and first pixel."""
     counts = np.bincount(inverse.ravel(), minlength=len(found))
-    missing.sort(key=lambda i: -counts[i])
+    missing.sort(key=lambda i: (-counts[i], first[i]))
     described = []
     for i in missing[:SHOWN_UNKNOWN]:
-        y, x = np.argwhere(inverse == i)[0]
+        y, x = divmod(int(first[i]), width)
         described.append(f"#{int(found[i]):06x} ({counts[i]} pixels, first at x={x}, y={y})")
     more = f" and {len(missing) - SHOWN_UNKNOWN} more" if len(missing) > SHOWN_UNKNOWN else ""
     return f"colours not in the legend: {', '.join(described)}{more} (or use match = \"nearest\")"
