@@ -229,3 +229,22 @@ def test_cli_crop_loop_still_and_summary(tmp_path, monkeypatch):
     result = invoke("render", "w.toml", "-o", "d.gif")
     assert result.exit_code == 2 and not Path("d.gif").exists()
     assert result.stderr.startswith("w.toml:14:1: render.crop: [x, y, width, height] = [0, 0, 40, 5] must lie inside")
+
+
+def test_the_palette_card_shows_every_element_in_its_colours(tmp_path, monkeypatch, ruleset):
+    from sandmod.swatches import ROW, SWATCH, card_layout
+
+    monkeypatch.chdir(tmp_path)
+    result = invoke("palette", "-o", "card.png")
+    assert result.exit_code == 0 and result.stdout == f"wrote card.png: {len(ruleset.elements)} elements\n"
+    palette = np.frombuffer(ruleset.palette, np.uint8).reshape(256, 3)
+    looks = ruleset.looks
+    with Image.open("card.png") as card:
+        assert card.height == ROW * (len(ruleset.elements) + 1) + 8
+        for row, element in enumerate(ruleset.elements, start=1):
+            centre = row * ROW + 2 + SWATCH // 2
+            for x, group in zip(card_layout(ruleset), (looks.normal, looks.scorched, looks.glow)):
+                for j, index in enumerate(group[element.index]):
+                    assert card.getpixel((x + j * SWATCH + SWATCH // 2, centre)) == tuple(palette[index])
+    Path("w.toml").write_text(WORLD.replace("height = 20", 'height = 20\nmods = ["sand"]'))
+    assert invoke("palette", "w.toml", "-o", "few.png").stdout == "wrote few.png: 4 elements\n"  # base's three, and sand

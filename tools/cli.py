@@ -408,6 +408,28 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
 
 
 @cli.command()
+@click.argument("world", required=False, type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=Path("palette.png"), show_default=True)
+@_mods_option
+def palette(world, output, mod_dirs) -> None:
+    """Write a PNG swatch card of every element's colours (of WORLD's mods, or of every mod found)."""
+    from sandmod.recording import atomic_path
+    from sandmod.swatches import swatch_card
+
+    if world is not None:
+        from sandmod.loading import load_world
+
+        ruleset = load_world(world, mod_dirs=mod_dirs).ruleset
+    else:
+        from sandmod.loading import load_ruleset
+
+        ruleset = load_ruleset(None, _mod_folders(mod_dirs))
+    with _writing(output), atomic_path(output) as tmp:
+        swatch_card(ruleset).save(tmp, format="PNG")
+    click.echo(f"wrote {display_path(output)}: {len(ruleset.elements)} elements")
+
+
+@cli.command()
 @click.option("--world", is_flag=True, help="The world file format instead of the mod format.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Write to this file (default: print it).")
 def schema(world, output) -> None:
