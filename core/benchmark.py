@@ -187,3 +187,68 @@ def run(
 def max_threads() -> int:
     """How many threads the kernel may use in this process (``NUMBA_NUM_THREADS``, else the CPUs)."""
     return int(os.environ.get("NUMBA_NUM_THREADS") or os.cpu_count() or 1)
+
+
+@dataclass(frozen=True)
+class RecordResult:
+    """One timed render: how the time splits between the kernel, building images and encoding them."""
+
+    format: str
+    scene: str
+    width: int
+    height: int
+    images: int  # one image a step, at one pixel a cell
+    threads: int
+    step_seconds: float
+    image_seconds: float  # palette frames from the world's state (colours, shades, scorch, glow)
+    encode_seconds: float  # the recorder: add_frame for each, then close (compressing, writing)
+    images_per_second: float  # encoding alone
+    encode_share: float  # of the whole render's time
+    file_mb: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threads: int, folder) -> RecordResult:
+    """Render ``images`` steps of ``scene`` with ``recorder`` into ``folder``, timing each part."""
+    from pathlib import Path
+
+    import numba
+
+    from .recording import VideoSettings
+
+    numba.set_num_threads(threads)
+    world = World(ruleset, size, size)
+    SCENES[scene](world, ruleset)
+    output = Path(folder) / f"bench-{recorder.name}{recorder.extensions[0] if recorder.extensions else ''}"
+    if recorder.folder:
+        output.mkdir()
+    out = recorder.open(output, VideoSettings(size, size, ruleset.palette, 25))
+    step = image = encode = 0.0
+    for _ in range(images):
+        t0 = time.perf_counter()
+        world.step()
+        t1 = time.perf_counter()
+        frame = world.image()
+        t2 = time.perf_counter()
+        out.add_frame(frame)
+        step, image, encode = step + t1 - t0, image + t2 - t1, encode + time.perf_counter() - t2
+    t3 = time.perf_counter()
+    out.close()
+    encode += time.perf_counter() - t3
+    written = sum(p.stat().st_size for p in output.iterdir()) if output.is_dir() else output.stat().st_size
+    return RecordResult(
+        format=recorder.name,
+        scene=scene,
+        width=size,
+        height=size,
+        images=images,
+        threads=threads,
+        step_seconds=round(step, 4),
+        image_seconds=round(image, 4),
+        encode_seconds=round(encode, 4),
+        images_per_second=round(images / encode, 1),
+        encode_share=round(encode / (step + image + encode), 3),
+        file_mb=round(written / 1e6, 2),
+    )

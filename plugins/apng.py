@@ -33,7 +33,7 @@ class ApngRecorder:
             duration=self._settings.frame_ms,
             loop=self._settings.loop,  # APNG counts plays; 0 = forever
             default_image=False,
-            compress_level=6,
+            compress_level=3,
         )
         self._frames.clear()
 

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 
 from sandmod import benchmark, kernelcache
@@ -76,3 +77,17 @@ def test_patch_scene_keeps_its_work_in_its_box(ruleset):
     box[127:641, 127:641] = True
     assert not world.cells[~box].any()
     assert world.awake_fraction < 0.6
+
+
+def test_bench_record_splits_a_render_into_steps_images_and_encoding():
+    args = ["bench", "--record", "gif", "--record", "png-frames", "--size", "256", "--steps", "3", "--threads", "1", "--json"]
+    result = CliRunner().invoke(cli, args, catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    runs = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [r["format"] for r in runs] == ["gif", "png-frames"]
+    for r in runs:
+        assert (r["width"], r["height"], r["images"], r["threads"]) == (256, 256, 3, 1)
+        assert r["step_seconds"] > 0 and r["image_seconds"] > 0 and r["encode_seconds"] > 0 and r["file_mb"] > 0
+        assert r["images_per_second"] == pytest.approx(3 / r["encode_seconds"], rel=0.05) and 0 < r["encode_share"] < 1
+    bad = CliRunner().invoke(cli, ["bench", "--record", "mp4", "--size", "256", "--steps", "1"])
+    assert bad.exit_code == 2 and "unknown format 'mp4'" in bad.stderr

@@ -513,7 +513,9 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--no-sleep", is_flag=True, help="Update every chunk every step, as if none could sleep.")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True, help="World seed.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per run.")
-def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
+@click.option("--record", "formats", multiple=True, metavar="FORMAT",
+              help="Time rendering instead: an image a step, recorded as FORMAT (repeatable: gif, apng, webp, png-frames).")
+def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats) -> None:
     """Time the kernel on a built-in scene: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -523,6 +525,9 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
       everything  twelve elements: reactions, lifetimes, heat, fire, blasts
       settled     layers of sand and water at rest (compare with --no-sleep)
       patch       mix in a 512x512 stone box in the middle, the rest empty
+
+    With --record, each step also makes an image and a recorder encodes it:
+    prints images encoded a second and encoding's share of the render.
     """
     import os
 
@@ -542,6 +547,9 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
         click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
     compile_seconds = benchmark.warm_up(ruleset)
     kernelcache.mark_compiled()
+    if formats:
+        _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)
+        return
     for scene in scenes:
         for threads in thread_counts:
             result = benchmark.run(ruleset, scene, size, steps, threads, sleep=not no_sleep, seed=seed, compile_seconds=compile_seconds)
@@ -555,6 +563,31 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json) -> None:
                 f"compile {result.compile_seconds:.1f} s, peak memory {result.peak_memory_mb:.0f} MB, "
                 f"state {result.state_bytes_per_cell:.2f} bytes/cell"
             )
+
+
+def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json) -> None:
+    import tempfile
+
+    from sandmod import benchmark
+    from sandmod.loading import load_registry
+
+    registry = load_registry()
+    unknown = [name for name in formats if name not in registry.recorders]
+    if unknown:
+        raise click.BadParameter(f"unknown format {unknown[0]!r} (known: {registry.recorder_choices()})", param_hint="'--record'")
+    for scene in scenes:
+        for threads in thread_counts:
+            for name in formats:
+                with tempfile.TemporaryDirectory() as folder:
+                    result = benchmark.record(ruleset, registry.recorders[name].value, scene, size, steps, threads, folder)
+                if as_json:
+                    click.echo(json.dumps(result.as_dict()))
+                    continue
+                click.echo(
+                    f"{name} {scene} {size}x{size}, {steps} images, {threads} thread{'s' * (threads > 1)}: "
+                    f"encoding {result.images_per_second:.0f} images/s ({result.encode_share:.0%} of the render), "
+                    f"images {steps / result.image_seconds:.0f}/s, steps {steps / result.step_seconds:.0f}/s, {result.file_mb:.2f} MB"
+                )
 
 
 def main() -> None:
