@@ -1,4 +1,4 @@
-"""The world file format: size, seed, mods, a painted scene, emitters, render settings.
+"""The world file format: size, seed, mods, a painted scene, emitters, sprays, a timeline, render settings.
 
 ::
 
@@ -42,12 +42,20 @@
     rate = 2                       # particles per frame
     stop = 300
 
+    [[timeline]]                   # at a frame, exactly one of: paint, erase, heat,
+    frame = 150                    # start, stop (a named emitter or spray), spawn, explode
+    heat = { shape = "rect", x = 60, y = 108, width = 30, height = 2, temperature = 600, frames = 100 }
+
     [render]
     frames = 400
     every = 2
     scale = 3
     fps = 30
+    loop = 0                       # plays in all; 0 = forever
+    crop = [0, 20, 160, 100]       # x, y, width, height in cells
 
+Shapes are rect, circle, line, stroke (a polyline), fill (a paint bucket) and
+image (a picture whose colours map to elements by a legend).
 Coordinates are cells; (0, 0) is the top-left corner and y grows downwards.
 """
 

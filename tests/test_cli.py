@@ -246,7 +246,8 @@ def test_commands_that_do_not_simulate_do_not_import_numba(tmp_path):
         import sys
         from click.testing import CliRunner
         from sandmod.tools.cli import cli
-        for args in (["list"], ["validate", {str(EXAMPLES / "hourglass.toml")!r}], ["validate"], ["schema"], ["list", "--provenance"]):
+        for args in (["list"], ["validate", {str(EXAMPLES / "hourglass.toml")!r}], ["validate"], ["schema"], ["list", "--provenance"],
+                     ["palette", "-o", {str(tmp_path / "p.png")!r}], ["validate", {str(EXAMPLES / "picture_level.toml")!r}]):
             result = CliRunner().invoke(cli, args)
             assert result.exit_code == 0, result.output
         assert "numba" not in sys.modules, "numba was imported"

@@ -21,12 +21,14 @@ def test_the_readme_mod_and_world_load_and_render_a_frame(tmp_path):
     (tmp_path / "mods").mkdir()
     (tmp_path / "mods" / "mud.toml").write_text(mod)
     (tmp_path / "world.toml").write_text(world)
+    (tmp_path / "level.png").write_bytes((ROOT / "examples" / "level.png").read_bytes())
     ruleset = load_ruleset(["mud"], [tmp_path / "mods"])
     assert ruleset.elements[ruleset.index("mud")].spec.lifetime.becomes == "sand"
     loaded = load_world(tmp_path / "world.toml")  # it names only sand and water
     assert "mud:mud" not in {e.id for e in loaded.ruleset.elements}
     assert loaded.warnings == []  # its made_with matches the bundled mods
-    loaded.world.step()
+    for _ in range(250):  # past every timeline event
+        loaded.world.step()
     assert loaded.world.counts()["water:water"] > 0
 
 
