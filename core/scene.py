@@ -192,7 +192,7 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
             build.note(loc + ("leaves",), exc.args[0])
     world.scheduled.sort(key=lambda scheduled: scheduled[0])  # stable: same frame, in the file's order
     if build.problems:
-        raise ProblemsError(build.problems)
+        raise ProblemsError(sorted(build.problems, key=lambda p: (p.line or 0, p.column or 0)))
     return world
 
 
@@ -210,5 +210,5 @@ def _check_names(spec: WorldFile, build: _Builder) -> None:
         for action in ("start", "stop"):
             name = getattr(event, action)
             if name is not None and name not in named:
-                known = ", ".join(sorted(named)) or "none has a name"
-                build.note(("timeline", number, action), f"no emitter or spray is called '{name}' (named: {known})")
+                known = f"named: {', '.join(sorted(named))}" if named else "none has a name"
+                build.note(("timeline", number, action), f"no emitter or spray is called '{name}' ({known})")
