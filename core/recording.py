@@ -51,6 +51,37 @@ class Recorder(Protocol):
         """Finish the file. Called once, after the last frame."""
 
 
+class SavedAtClose:
+    """A recorder for formats pillow writes in one go: it keeps each frame as an image and saves all on close.
+
+    Subclasses say how a frame becomes an image (:meth:`convert`) and how the
+    images are saved (:meth:`save`).
+    """
+
+    def __init__(self, path: Path, settings: VideoSettings):
+        self.path = path
+        self.settings = settings
+        self._images: list = []
+
+    def convert(self, frame: np.ndarray):
+        """The pillow image kept for a frame (by default in the shared palette)."""
+        return palette_image(frame, self.settings.palette)
+
+    def save(self, first, rest: list) -> None:
+        """Write the images to ``self.path``."""
+        raise NotImplementedError
+
+    def add_frame(self, frame: np.ndarray) -> None:
+        self._images.append(self.convert(frame))
+
+    def close(self) -> None:
+        if not self._images:
+            raise ValueError("no frames to write")
+        first, *rest = self._images
+        self.save(first, rest)
+        self._images.clear()
+
+
 @dataclass(frozen=True)
 class RecorderSpec:
     """An output format that plugins register."""

@@ -82,6 +82,11 @@ class _Builder:
             return None
         return lambda cells: np.where(area(cells), element, -1)
 
+    def erasure(self, loc: Loc, shape) -> Layer | None:
+        """What erasing a shape does: its cells become empty (element 0)."""
+        area = self.area(loc, shape)
+        return None if area is None else lambda cells: np.where(area(cells), 0, -1)
+
     def picture(self, loc: Loc, picture: Picture) -> Layer | None:
         elements = [self.element(loc + ("legend", colour), ref) for colour, ref in picture.legend.items()]
         world = self.world
@@ -162,14 +167,14 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
     blasts = [(("explosions", number), blast, blast.frame) for number, blast in enumerate(spec.explosions)]
     for number, event in enumerate(spec.timeline):
         loc = ("timeline", number, event.action)
-        if event.paint is not None or event.erase is not None:
-            erase = event.erase is not None
-            layer = build.area(loc, event.erase) if erase else build.layer(loc, event.paint)
+        if event.paint is not None:
+            layer = build.layer(loc, event.paint)
             if layer is not None:
-                if erase:
-                    layer = (lambda area: lambda cells: np.where(area(cells), 0, -1))(layer)
-                celsius = None if erase else getattr(event.paint, "temperature", None)
-                world.paintings.append(Painting(event.frame, layer, celsius, number))
+                world.paintings.append(Painting(event.frame, layer, getattr(event.paint, "temperature", None), number))
+        elif event.erase is not None:
+            layer = build.erasure(loc, event.erase)
+            if layer is not None:
+                world.paintings.append(Painting(event.frame, layer, None, number))
         elif event.heat is not None:
             area = build.area(loc, event.heat)
             if area is not None:

@@ -61,10 +61,13 @@ def load_snapshot(world: World, path: Path) -> list[str]:
             arrays = {key: data[key] for key in data.files if key != "meta"}
     except FileNotFoundError:
         raise fail("no such snapshot file") from None
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError):
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile):  # ValueError covers bad JSON
         raise fail("not a sandmod snapshot (write one with 'sandmod render --save-snapshot FILE.npz')") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise fail(f"snapshot format {meta.get('format') if isinstance(meta, dict) else '?'}; this sandmod reads format {FORMAT}")
+    missing = [key for key in ("frame", "seed", "width", "height", "elements") if key not in meta]
+    if missing:
+        raise fail(f"its description lacks {', '.join(missing)}")
     size = (meta["height"], meta["width"])
     if size != (world.height, world.width):
         raise fail(f"made for a {size[1]}x{size[0]} world; this world is {world.width}x{world.height}")

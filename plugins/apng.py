@@ -2,40 +2,24 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import numpy as np
-
 from sandmod.hooks import hookimpl
-from sandmod.recording import RecorderSpec, VideoSettings, palette_image
+from sandmod.recording import RecorderSpec, SavedAtClose
 
 
-class ApngRecorder:
-    """Collects palette frames and writes them as one indexed animated PNG."""
+class ApngRecorder(SavedAtClose):
+    """Palette frames as one indexed animated PNG."""
 
-    def __init__(self, path: Path, settings: VideoSettings):
-        self._path = path
-        self._settings = settings
-        self._frames: list = []
-
-    def add_frame(self, frame: np.ndarray) -> None:
-        self._frames.append(palette_image(frame, self._settings.palette))
-
-    def close(self) -> None:
-        if not self._frames:
-            raise ValueError("no frames to write")
-        first, *rest = self._frames
+    def save(self, first, rest: list) -> None:
         first.save(
-            self._path,
+            self.path,
             format="PNG",
             save_all=True,
             append_images=rest,
-            duration=self._settings.frame_ms,
-            loop=self._settings.loop,  # APNG counts plays; 0 = forever
+            duration=self.settings.frame_ms,
+            loop=self.settings.loop,  # APNG counts plays; 0 = forever
             default_image=False,
-            compress_level=3,
+            compress_level=3,  # as small as 6 on these images, and faster
         )
-        self._frames.clear()
 
 
 @hookimpl

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from sandmod.hooks import hookimpl
-from sandmod.recording import RecorderSpec, VideoSettings, palette_image
+from sandmod.recording import RecorderSpec, SavedAtClose, VideoSettings, palette_image
 
 #: Browsers slow down GIF frames shorter than 20 ms, and delays are in 10 ms steps.
 MIN_DELAY_MS = 20
@@ -40,36 +40,30 @@ def gif_delay_ms(fps: float) -> int:
     return max(MIN_DELAY_MS, int(round(1000 / fps / 10)) * 10)
 
 
-class GifRecorder:
-    """Collects palette frames and writes them as one animated GIF."""
+class GifRecorder(SavedAtClose):
+    """Palette frames as one animated GIF with a single global colour table."""
 
     def __init__(self, path: Path, settings: VideoSettings):
-        self._path = path
+        super().__init__(path, settings)
         self._palette = distinct_colours(settings.palette)
-        self._settings = settings
-        self._frames: list = []
 
-    def add_frame(self, frame: np.ndarray) -> None:
-        self._frames.append(palette_image(frame, self._palette))
+    def convert(self, frame: np.ndarray):
+        return palette_image(frame, self._palette)
 
-    def close(self) -> None:
-        if not self._frames:
-            raise ValueError("no frames to write")
-        first, *rest = self._frames
-        plays = self._settings.loop
+    def save(self, first, rest: list) -> None:
+        plays = self.settings.loop
         looping = {} if plays == 1 else {"loop": max(plays - 1, 0)}  # GIF counts repeats; none: play once
         first.save(
-            self._path,
+            self.path,
             format="GIF",
             save_all=True,
             append_images=rest,
-            duration=gif_delay_ms(self._settings.fps),
+            duration=gif_delay_ms(self.settings.fps),
             palette=self._palette,  # one global colour table, no table per frame
             optimize=False,
             disposal=1,
             **looping,
         )
-        self._frames.clear()
 
 
 @hookimpl
