@@ -216,7 +216,7 @@ def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threa
 
     import numba
 
-    from .recording import VideoSettings
+    from .recording import VideoSettings, output_bytes
 
     numba.set_num_threads(threads)
     world = World(ruleset, size, size)
@@ -237,7 +237,7 @@ def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threa
     t3 = time.perf_counter()
     out.close()
     encode += time.perf_counter() - t3
-    written = sum(p.stat().st_size for p in output.iterdir()) if output.is_dir() else output.stat().st_size
+    written = output_bytes(output)
     return RecordResult(
         format=recorder.name,
         scene=scene,

@@ -138,6 +138,12 @@ def atomic_folder(target: Path, files: str) -> Iterator[Path]:
             shutil.rmtree(tmp)
 
 
+def output_bytes(path: Path) -> int:
+    """The size of an output: a file, or the files of a folder recorder's folder."""
+    path = Path(path)
+    return sum(p.stat().st_size for p in path.iterdir()) if path.is_dir() else path.stat().st_size
+
+
 def palette_image(frame: np.ndarray, palette: bytes):
     """A palette frame as a pillow image in mode ``P``."""
     from PIL import Image

@@ -66,11 +66,17 @@ class _Builder:
             return None
 
     def area(self, loc: Loc, shape, what: str = "the shape") -> Callable[[np.ndarray], np.ndarray] | None:
-        """The shape's mask function, or None (problem noted) when it covers no cell of the world now."""
-        if not shape_mask(shape, self.world.cells).any():
+        """The shape's mask function, or None (problem noted) when it covers no cell of the world now.
+
+        Only a fill depends on what the world holds; other shapes' masks are made once.
+        """
+        mask = shape_mask(shape, self.world.cells)
+        if not mask.any():
             self.note(loc, f"{what} lies outside the {self.world.width}x{self.world.height} world")
             return None
-        return lambda cells: shape_mask(shape, cells)
+        if isinstance(shape, FillArea):
+            return lambda cells: shape_mask(shape, cells)
+        return lambda cells: mask
 
     def layer(self, loc: Loc, shape) -> Layer | None:
         """What painting a shape (or a picture) does, or None (problem noted)."""

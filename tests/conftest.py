@@ -74,3 +74,12 @@ def run(world: World, frames: int) -> World:
     for _ in range(frames):
         world.step()
     return world
+
+
+def invoke(*args: str):
+    """Run the ``sandmod`` command line in this process; a crash is a test error, not an exit code."""
+    from click.testing import CliRunner
+
+    from sandmod.tools.cli import cli
+
+    return CliRunner().invoke(cli, list(args), catch_exceptions=False)

@@ -10,11 +10,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from PIL import Image, ImageSequence
 
-from conftest import write_mods
-from sandmod.tools.cli import cli
+from conftest import invoke, write_mods
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -52,10 +50,6 @@ fps = 10
 @pytest.fixture(autouse=True)
 def _in_tmp(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-
-
-def invoke(*args: str):
-    return CliRunner().invoke(cli, list(args), catch_exceptions=False)
 
 
 def palette_colours(path: Path) -> set[tuple[int, int, int]]:

@@ -6,13 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from PIL import Image, ImageSequence
 
+from conftest import invoke
 from sandmod.loading import load_registry
 from sandmod.recording import VideoSettings
 from sandmod.render import Crop, Framing, enlarge, render
-from sandmod.tools.cli import cli
 from sandmod.world import SCORCHED, World
 
 REGISTRY = load_registry()
@@ -177,10 +176,6 @@ def test_scorched_cells_are_darker_and_every_colour_is_in_one_palette(ruleset):
     palette = np.frombuffer(ruleset.palette, np.uint8).reshape(256, 3).astype(int)
     assert (palette[after[:4]].sum(axis=1) < palette[before[:4]].sum(axis=1)).all()
     assert (after[4:] == before[4:]).all()
-
-
-def invoke(*args: str):
-    return CliRunner().invoke(cli, list(args), catch_exceptions=False)
 
 
 WORLD = """

@@ -6,13 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from PIL import Image
 
+from conftest import invoke
 from sandmod.errors import ProblemsError
 from sandmod.loading import load_ruleset, load_world
 from sandmod.snapshots import load_snapshot, save_snapshot
-from sandmod.tools.cli import cli
 from sandmod.world import State, World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -61,10 +60,6 @@ def test_elements_are_mapped_by_name_across_other_mods(tmp_path):
     no_water = World(load_ruleset(["sand"]), 16, 16)
     with pytest.raises(ProblemsError, match=r"s\.npz: holds water:water, which no loaded mod defines"):
         load_snapshot(no_water, tmp_path / "s.npz")
-
-
-def invoke(*args: str):
-    return CliRunner().invoke(cli, list(args), catch_exceptions=False)
 
 
 def test_cli_continues_from_a_snapshot_to_the_same_last_frame(tmp_path, monkeypatch):

@@ -68,6 +68,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     """Simulate WORLD (a world .toml file) and write an animation."""
     from sandmod import kernelcache
     from sandmod.loading import load_world
+    from sandmod.recording import output_bytes
     from sandmod.render import Framing
     from sandmod.render import render as run
 
@@ -112,7 +113,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
         extras = "".join(f", {what} {display_path(path)}" for what, path in (("still", still), ("snapshot", save_snapshot)) if path)
         click.echo(
             f"wrote {display_path(output)}: {result.images} images of {result.width}x{result.height} "
-            f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({_size(output) / 1e6:.2f} MB){extras}"
+            f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({output_bytes(output) / 1e6:.2f} MB){extras}"
         )
 
 
@@ -123,11 +124,6 @@ def _writing(path: Path):
         yield
     except OSError as exc:
         raise ProblemsError([Problem(display_path(path), None, "", f"cannot write: {exc.strerror or exc}")]) from None
-
-
-def _size(path: Path) -> int:
-    """Bytes of a file, or of all files in a folder."""
-    return sum(p.stat().st_size for p in path.iterdir()) if path.is_dir() else path.stat().st_size
 
 
 def _recorder_and_output(loaded, world: Path, output: Path | None, format_name: str | None):
