@@ -286,8 +286,21 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                         timer[y, x] = left - 1
                     h = _cell_key(move_key, x, y)
 
-                    # 3. Reactions: try each touching neighbour once, in a hashed order.
-                    if reactive[e] != 0:
+                    # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
+                    # test: does any neighbour's bit show in the element's partner mask?
+                    partners = reactive[e]
+                    if partners != 0:
+                        near = 0
+                        if x + 1 < width:
+                            near |= 1 << (cells[y, x + 1] & 63)
+                        if y + 1 < height:
+                            near |= 1 << (cells[y + 1, x] & 63)
+                        if x > 0:
+                            near |= 1 << (cells[y, x - 1] & 63)
+                        if y > 0:
+                            near |= 1 << (cells[y - 1, x] & 63)
+                        partners &= near
+                    if partners != 0:
                         reacted = False
                         start = (h >> 1) & 3
                         for k in range(4):
@@ -539,7 +552,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                         if nx < 0 or ny < 0 or nx >= width or ny >= height:
                             continue
                         c = cells[ny, nx]
-                        if archetype[c] == POWDER and (flags[ny, nx] & LOOSE) == 0:
+                        if knock_chance[c] != 0 and (flags[ny, nx] & LOOSE) == 0:  # only powders have a chance
                             if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
                                 flags[ny, nx] |= LOOSE
                                 vx[ny, nx] = push * KNOCK_SPEED
