@@ -138,7 +138,8 @@ def peak_memory_mb() -> float:
 
 def state_bytes(world: World) -> int:
     """Bytes of everything a world keeps between steps: its cells and its chunks' bookkeeping."""
-    return sum(a.nbytes for a in world.state) + world.awake.nbytes + world._woken.nbytes + world._detonations.nbytes
+    chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations)
+    return sum(a.nbytes for a in world.state) + sum(a.nbytes for a in chunks)
 
 
 def warm_up(ruleset: Ruleset) -> float:

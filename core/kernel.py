@@ -143,14 +143,22 @@ def _energy(temperature, cap):
     return max(T_LOW, min(T_HIGH, temperature)) * cap
 
 
+@njit(inline="always", cache=True)
+def _cooling_loss(energy, cap, cooling, ambient):
+    """The heat a cell of ``cooling`` (of 256) gains per frame towards the outside's temperature (a loss when warmer)."""
+    return _scaled(_energy(ambient, cap) - energy, cooling) if cooling != 0 else 0
+
+
 @njit(cache=True)
-def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tile, x0, y0, x1, y1):
+def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
     A chunk's cells are updated when it is ``awake`` (from last frame) or
     ``woken`` (by a change nearby earlier this frame). Every change, and every
     chance that did not come up, wakes the chunks within two cells of where it
-    happened in ``woken``. Explosives that go off are marked DETONATING and
+    happened in ``woken``, and where an element or a heat changed, other than
+    by two cells of one temperature trading places, in ``stirred`` too (see
+    :func:`conduct`). Explosives that go off are marked DETONATING and
     counted in ``detonations[tile]``, for :func:`take_detonations` after the step.
     """
     cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
@@ -162,11 +170,12 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
     reactive, displace = t.reactive, t.displace
     react_chance, react_into_a, react_into_b = t.react_chance, t.react_into_a, t.react_into_b
     react_tsum_min, react_tsum_max, react_heat = t.react_tsum_min, t.react_tsum_max, t.react_heat
-    heat_cap, heat_recip, temp_start, thermal = t.heat_cap, t.heat_recip, t.temp_start, t.thermal
+    heat_cap, heat_recip, temp_start, thermal, cooling = t.heat_cap, t.heat_recip, t.temp_start, t.thermal, t.cooling
     hot_limit, heated_into, cold_limit, cooled_into = t.hot_limit, t.heated_into, t.cold_limit, t.cooled_into
     ignite_limit, catch_chance, burn_frames, burn_jitter = t.ignite_limit, t.catch_chance, t.burn_frames, t.burn_jitter
     burn_limit, burn_heat, flame, flame_chance = t.burn_limit, t.burn_heat, t.flame, t.flame_chance
     ash, ash_chance, extinguishes = t.ash, t.ash_chance, t.extinguishes
+    ambient = int(t.temp_start[0])  # the air's temperature is the world's outside
     knock_key = _mix32(move_key ^ SALT_KNOCK)
     fire_key = _mix32(move_key ^ SALT_FIRE)
     first_cx = x0 >> CHUNK_SHIFT
@@ -187,6 +196,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                 if e == 0 or (flags[y, x] & DONE) != 0:
                     continue
                 busy = False  # did anything change, or might it on a later frame?
+                stir = False  # did an element or a heat change (besides even swaps)?
                 bx0 = bx1 = x  # the cells it moved between
                 by0 = by1 = y
                 for _ in range(1):  # one pass; `break` ends the cell's update
@@ -237,6 +247,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                                         if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[ny, nx] == 0:
                                             if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
                                                 cells[ny, nx] = product
+                                                stir = True
                                                 shade[ny, nx], timer[ny, nx] = _spawn_state(
                                                     _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
                                                 )
@@ -257,7 +268,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                                         flags[ny, nx] |= BURNING
                                         timer[ny, nx] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
                         if into != e:
-                            busy = True
+                            busy = stir = True
                             cells[y, x] = into
                             shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                             vx[y, x] = vy[y, x] = carry[y, x] = 0
@@ -266,7 +277,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                             break
                         if energy != heat[y, x]:
                             heat[y, x] = energy
-                            busy = True
+                            busy = stir = True
                         if f != flags[y, x]:
                             flags[y, x] = f
                             busy = True
@@ -278,6 +289,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                         if left <= 1:
                             into = life_into[e]
                             cells[y, x] = into
+                            stir = True
                             shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                             vx[y, x] = vy[y, x] = carry[y, x] = 0
                             heat[y, x] = _energy(_temperature(int(heat[y, x]), heat_recip[e]), heat_cap[into])
@@ -327,12 +339,14 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                             warm = react_heat[e, b]
                             if into_a != e:
                                 cells[y, x] = into_a
+                                stir = True
                                 shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
                                 vx[y, x] = vy[y, x] = carry[y, x] = 0
                                 heat[y, x] = _energy(ta + warm, heat_cap[into_a])
                                 flags[y, x] &= FRESH
                             if into_b != b:
                                 cells[ny, nx] = into_b
+                                stir = True
                                 shade[ny, nx], timer[ny, nx] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
                                 vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
                                 heat[ny, nx] = _energy(tb + warm, heat_cap[into_b])
@@ -513,6 +527,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                     # Move: swap everything with the cell at the end of the walk.
                     marks = flags[y, x] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
                     if px != x or py != y:
+                        # Heat stays even where two cells of one temperature trade places and neither cools.
+                        stir = (
+                            stir
+                            or heat[y, x] * heat_cap[entered] != heat[py, px] * heat_cap[e]
+                            or _cooling_loss(int(heat[y, x]), heat_cap[e], cooling[e], ambient) != 0
+                            or _cooling_loss(int(heat[py, px]), heat_cap[entered], cooling[entered], ambient) != 0
+                        )
                         cells[y, x] = entered
                         cells[py, px] = e
                         shade[y, x], shade[py, px] = shade[py, px], shade[y, x]
@@ -530,6 +551,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                         if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
                             into = carry[py, px]
                             cells[py, px] = into
+                            stir = True
                             carry[py, px] = 0
                             heat[py, px] = _energy(_temperature(int(heat[py, px]), heat_recip[e]), heat_cap[into])
                             if into == 0:
@@ -564,14 +586,18 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, deton
                     wx1 = min(bx1 + WAKE_MARGIN, width - 1) >> CHUNK_SHIFT
                     if wy0 == wy1 and wx0 == wx1:  # the common case: well inside one chunk
                         woken[wy0, wx0] = 1
+                        if stir:
+                            stirred[wy0, wx0] = 1
                     else:
                         for wy in range(wy0, wy1 + 1):
                             for wx in range(wx0, wx1 + 1):
                                 woken[wy, wx] = 1
+                                if stir:
+                                    stirred[wy, wx] = 1
 
 
 @njit(cache=True)
-def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
+def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     """Heat flows between touching cells of the awake chunks among rows y0..y1-1 and
     columns x0..x1-1 (and the row below and column right of them), and cells with
     ``cooling`` lose heat to the outside.
@@ -584,6 +610,12 @@ def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
     gains, so conduction alone conserves the total exactly. The sweep runs
     forwards on even frames and backwards on odd ones, so heat has no
     favourite direction. A cell whose heat changes wakes the chunks around it.
+
+    Even heat is skipped. A chunk is marked ``even`` (1) when a whole sweep of
+    it finds every pair it looks at (right and down, any conductance) at
+    exactly one temperature and no cell cooling. Until a change has ``stirred``
+    it (see :func:`step_region`; :func:`step` clears the marks of stirred
+    chunks), a sweep there would change nothing, so it is left out.
     """
     cells, heat = s.cells, s.heat
     height, width = cells.shape
@@ -593,6 +625,11 @@ def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
     last_cx, last_cy = (width - 1) >> CHUNK_SHIFT, (height - 1) >> CHUNK_SHIFT
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
+    first_cy, last_row_cy = y0 >> CHUNK_SHIFT, (y1 - 1) >> CHUNK_SHIFT
+    for cy in range(first_cy, last_row_cy + 1):
+        for cx in range(first_cx, first_cx + segments):
+            if (awake[cy, cx] != 0 or woken[cy, cx] != 0) and (even[cy, cx] != 1 or stirred[cy, cx] != 0):
+                even[cy, cx] = 2  # swept whole: even, unless a pair at two temperatures or a cooling cell stirs it
     for r in range(y1 - y0):
         y = y1 - 1 - r if backwards else y0 + r
         cy = y >> CHUNK_SHIFT
@@ -600,6 +637,9 @@ def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
             cx = first_cx + (segments - 1 - j if backwards else j)
             if awake[cy, cx] == 0 and woken[cy, cx] == 0:
                 continue
+            if even[cy, cx] == 1 and stirred[cy, cx] == 0:
+                continue  # one temperature throughout, as its last sweep found
+            uneven = False
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
             for i in range(sx1 - sx0):
@@ -607,35 +647,43 @@ def conduct(s, t, frame, awake, woken, x0, y0, x1, y1):
                 e = cells[y, x]
                 energy = int(heat[y, x])
                 changed = False
-                if cooling[e] != 0:
-                    loss = _scaled(_energy(ambient, heat_cap[e]) - energy, cooling[e])
-                    if loss != 0:
-                        energy += loss
-                        heat[y, x] = energy
-                        changed = True
+                loss = _cooling_loss(energy, heat_cap[e], cooling[e], ambient)
+                if loss != 0:
+                    energy += loss
+                    heat[y, x] = energy
+                    changed = True
                 g_own = conductance[e]
-                if g_own != 0:
-                    for k in range(2):
-                        nx = x + 1 - k
-                        ny = y + k
-                        if nx >= width or ny >= height:
-                            continue
-                        n = cells[ny, nx]
-                        other = int(heat[ny, nx])
-                        if other * heat_cap[e] == energy * heat_cap[n]:
-                            continue  # the common case: the same temperature (E_a / C_a == E_b / C_b)
-                        g = min(g_own, conductance[n])
-                        gap = _temperature(energy, heat_recip[e]) - _temperature(other, heat_recip[n])
-                        flow = _scaled(gap * g, 1)
-                        if flow != 0:
-                            energy -= flow
-                            heat[y, x] = energy
-                            heat[ny, nx] = other + flow
-                            changed = True
-                if changed:  # wake the chunks of the cells next to it and to its partners
+                for k in range(2):
+                    nx = x + 1 - k
+                    ny = y + k
+                    if nx >= width or ny >= height:
+                        continue
+                    n = cells[ny, nx]
+                    other = int(heat[ny, nx])
+                    if other * heat_cap[e] == energy * heat_cap[n]:
+                        continue  # the common case: the same temperature (E_a / C_a == E_b / C_b)
+                    uneven = True
+                    g = min(g_own, conductance[n])
+                    if g == 0:
+                        continue
+                    gap = _temperature(energy, heat_recip[e]) - _temperature(other, heat_recip[n])
+                    flow = _scaled(gap * g, 1)
+                    if flow != 0:
+                        energy -= flow
+                        heat[y, x] = energy
+                        heat[ny, nx] = other + flow
+                        changed = True
+                if changed:  # wake (and stir) the chunks of the cells next to it and to its partners
                     for wy in range(max(y - 1, 0) >> CHUNK_SHIFT, min((y + 2) >> CHUNK_SHIFT, last_cy) + 1):
                         for wx in range(max(x - 1, 0) >> CHUNK_SHIFT, min((x + 2) >> CHUNK_SHIFT, last_cx) + 1):
                             woken[wy, wx] = 1
+                            stirred[wy, wx] = 1
+            if uneven:
+                stirred[cy, cx] = 1
+    for cy in range(first_cy, last_row_cy + 1):
+        for cx in range(first_cx, first_cx + segments):
+            if even[cy, cx] == 2:
+                even[cy, cx] = 1
 
 
 @njit(cache=True, parallel=True)
@@ -652,7 +700,7 @@ def clear_marks(flags, awake):
 
 
 @njit(cache=True, parallel=True)
-def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tiles, count):
+def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count):
     """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one thread per tile at a time."""
     height, width = s.cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
@@ -662,12 +710,12 @@ def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, deto
         y0 = (tile // tiles_x) << TILE_SHIFT
         x1 = min(x0 + TILE, width)
         y1 = min(y0 + TILE, height)
-        conduct(s, t, frame, awake, woken, x0, y0, x1, y1)
-        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, tile, x0, y0, x1, y1)
+        conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
+        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1)
 
 
 @njit(cache=True)
-def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, hands):
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands):
     """Advance the world by one frame; returns how many explosives went off (see :func:`take_detonations`).
 
     The world is cut into tiles of 2 x 2 chunks, updated in four passes by
@@ -676,7 +724,8 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations,
     same time on as many threads as there are, with the same result as one
     after another. Within a tile, heat flows first, then the cells move. Only
     chunks that are awake are touched; ``awake`` then holds the chunks to
-    update next frame. ``hands``, the number of threads, only decides which
+    update next frame. ``even`` marks chunks whose heat needs no sweep (see
+    :func:`conduct`). ``hands``, the number of threads, only decides which
     thread takes which tile.
     """
     flags = s.flags
@@ -685,6 +734,7 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations,
     tiles_y = (height + TILE - 1) >> TILE_SHIFT
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
     woken[:] = 0
+    stirred[:] = 0
     detonations[:] = 0
     clear_marks(flags, awake)
     todo = np.empty(tiles_y * tiles_x, np.int64)
@@ -712,8 +762,12 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations,
             for k in range(hand, count, hands):
                 order[dealt] = todo[k]
                 dealt += 1
-        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, detonations, order, count)
+        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count)
     awake[:] = woken
+    for cy in range(chunks_y):
+        for cx in range(chunks_x):
+            if stirred[cy, cx] != 0:
+                even[cy, cx] = 0
     return detonations.sum()
 
 
@@ -753,7 +807,7 @@ def take_detonations(s, t, detonations):
 
 
 @njit(cache=True)
-def explode(s, t, blasts, count, key, particle, awake):
+def explode(s, t, blasts, count, key, particle, awake, even):
     """Set off the first ``count`` explosions of ``blasts``, one after another.
 
     Each blast sends a ray from its centre to every cell on the border of the
@@ -767,7 +821,7 @@ def explode(s, t, blasts, count, key, particle, awake):
     reach is destroyed or scorched once, whatever the order of the rays.
     Destroyed powder and liquid cells may fly off as particles; scorched cells
     darken, with a chance that falls off across the fringe. The chunks a blast
-    reaches are marked ``awake``.
+    reaches are marked ``awake``, and lose their ``even`` mark.
     """
     cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
     height, width = cells.shape
@@ -780,6 +834,7 @@ def explode(s, t, blasts, count, key, particle, awake):
         for wy in range(max(cy - reach - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((cy + reach + WAKE_MARGIN) >> CHUNK_SHIFT, awake.shape[0] - 1) + 1):
             for wx in range(max(cx - reach - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((cx + reach + WAKE_MARGIN) >> CHUNK_SHIFT, awake.shape[1] - 1) + 1):
                 awake[wy, wx] = 1
+                even[wy, wx] = 0
         # 0: untouched; 1: destroyed; 2 + d: fringe cell d cells past the destruction (the nearest ray's d).
         mark = np.zeros((2 * reach + 1, 2 * reach + 1), np.int16)
         if 0 <= cx < width and 0 <= cy < height:

@@ -97,11 +97,10 @@ def load_snapshot(world: World, path: Path) -> list[str]:
         getattr(state, key)[...] = remap[arrays[key]] if key in ELEMENT_ARRAYS else arrays[key]
     _keep_temperatures(state, arrays.get("heat_cap"), world.tables.heat_cap, remap, used)
     world.frame, world.seed = int(meta["frame"]), int(meta["seed"])
+    world.wake()  # every chunk's marks start afresh: awake, and heat not known to be even
     awake = arrays.get("awake")
     if awake is not None and awake.shape == world.awake.shape:
-        world.awake[...] = awake
-    else:
-        world.wake()
+        world.awake[...] = awake  # the snapshot's own, so the run goes on as it would have
     return _mod_warnings(meta.get("mods", {}), world)
 
 

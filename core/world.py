@@ -201,6 +201,8 @@ class World:
         chunks = (-(-height // CHUNK), -(-width // CHUNK))
         self.awake = np.ones(chunks, np.uint8)  # chunks to update on the next step
         self._woken = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks woken during a step
+        self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
+        self._stirred = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
         self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
@@ -327,6 +329,7 @@ class World:
         """
         if ys is None or xs is None:
             self.awake[:] = 1
+            self._even[:] = 0
             return
         ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
         if ys.size == 0:
@@ -336,6 +339,7 @@ class World:
                 cy = np.clip(ys + dy, 0, self.height - 1) >> CHUNK_SHIFT
                 cx = np.clip(xs + dx, 0, self.width - 1) >> CHUNK_SHIFT
                 self.awake[cy, cx] = 1
+                self._even[cy, cx] = 0
 
     @property
     def awake_fraction(self) -> float:
@@ -358,7 +362,7 @@ class World:
         from .kernel import explode
 
         key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
-        explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake)
+        explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake, self._even)
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
@@ -393,6 +397,8 @@ class World:
             self.frame,
             self.awake,
             self._woken,
+            self._even,
+            self._stirred,
             self._detonations,
             get_num_threads(),
         )

@@ -43,6 +43,44 @@ def test_sleeping_chunks_change_nothing(name, frames):
     assert slept / frames > 0.1  # and the chunks did sleep
 
 
+@pytest.mark.parametrize(("name", "frames"), [("lava_lake", 150), ("forest_fire", 150), ("boiling_pool", 120), ("fountain", 120)])
+def test_skipping_even_heat_changes_nothing(name, frames):
+    # Conduction left out where a chunk's heat is even gives the same state as a sweep of every awake chunk.
+    skipping = load_world(EXAMPLES / f"{name}.toml").world
+    sweeping = load_world(EXAMPLES / f"{name}.toml").world
+    skipped = 0.0
+    for frame in range(frames):
+        skipped += skipping._even.mean()
+        sweeping._even[:] = 0
+        skipping.step()
+        sweeping.step()
+        assert digest(skipping) == digest(sweeping), f"frame {frame}"
+    assert skipped / frames > 0.1  # and heat was found even
+
+
+def test_a_hot_grain_falling_through_even_air_warms_it_on_its_way(ruleset):
+    def dropped():
+        world = make_world(ruleset, ["." * 6] * 120)  # four chunks high
+        for _ in range(3):
+            world.step()
+        assert world._even.all()
+        grain = np.zeros(world.cells.shape, bool)
+        grain[1, 3] = True
+        world.paint(grain, ruleset.index("sand"))
+        world.set_temperature(grain, 600)
+        return world
+
+    skipping, sweeping = dropped(), dropped()
+    for frame in range(40):
+        sweeping._even[:] = 0
+        skipping.step()
+        sweeping.step()
+        assert digest(skipping) == digest(sweeping), f"frame {frame}"
+    sand = np.argwhere(skipping.cells == ruleset.index("sand"))[0]
+    assert sand[0] > 100  # it fell into chunks whose heat was even
+    assert skipping._temperature_units()[70:100].max() > skipping._temperature_units()[0, 0]  # and warmed the air there
+
+
 def test_frames_are_the_same_on_any_number_of_threads():
     code = """
 import hashlib, sys, numba
