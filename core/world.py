@@ -322,7 +322,8 @@ class World:
         self.wake(ys, xs)
 
     def wake(self, ys: np.ndarray | None = None, xs: np.ndarray | None = None) -> None:
-        """Update the chunks around the given cells (all chunks, without cells) on the next step.
+        """Update the chunks around the given cells (all chunks, without cells) on the next step,
+        heat conduction included (their heat is no longer known to be even).
 
         The world's own methods call this; code that writes ``state`` arrays
         directly must call it too, or chunks at rest will not notice the change.
