@@ -573,8 +573,10 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             push = (-1, 1)[k - 4]
                         if nx < 0 or ny < 0 or nx >= width or ny >= height:
                             continue
+                        if (flags[ny, nx] & LOOSE) != 0:
+                            continue  # already in motion (fluids stay loose)
                         c = cells[ny, nx]
-                        if knock_chance[c] != 0 and (flags[ny, nx] & LOOSE) == 0:  # only powders have a chance
+                        if knock_chance[c] != 0:  # only powders have a chance
                             if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
                                 flags[ny, nx] |= LOOSE
                                 vx[ny, nx] = push * KNOCK_SPEED
