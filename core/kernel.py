@@ -96,6 +96,7 @@ KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
 SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
 SALT_FIRE = 0x61C88647
+EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
 
 
 @njit(inline="always", cache=True)
@@ -613,9 +614,9 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     forwards on even frames and backwards on odd ones, so heat has no
     favourite direction. A cell whose heat changes wakes the chunks around it.
 
-    Even heat is skipped. A chunk is marked ``even`` (1) when a whole sweep of
-    it finds every pair it looks at (right and down, any conductance) at
-    exactly one temperature and no cell cooling. Until a change has ``stirred``
+    Even heat is skipped. A chunk is marked ``even`` (EVEN) when a whole sweep of
+    it (marked SWEPT meanwhile) finds every pair it looks at (right and down,
+    any conductance) at exactly one temperature and no cell cooling. Until a change has ``stirred``
     it (see :func:`step_region`; :func:`step` clears the marks of stirred
     chunks), a sweep there would change nothing, so it is left out.
     """
@@ -627,11 +628,11 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     last_cx, last_cy = (width - 1) >> CHUNK_SHIFT, (height - 1) >> CHUNK_SHIFT
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
-    first_cy, last_row_cy = y0 >> CHUNK_SHIFT, (y1 - 1) >> CHUNK_SHIFT
-    for cy in range(first_cy, last_row_cy + 1):
+    first_cy, end_cy = y0 >> CHUNK_SHIFT, ((y1 - 1) >> CHUNK_SHIFT) + 1
+    for cy in range(first_cy, end_cy):
         for cx in range(first_cx, first_cx + segments):
-            if (awake[cy, cx] != 0 or woken[cy, cx] != 0) and (even[cy, cx] != 1 or stirred[cy, cx] != 0):
-                even[cy, cx] = 2  # swept whole: even, unless a pair at two temperatures or a cooling cell stirs it
+            if (awake[cy, cx] != 0 or woken[cy, cx] != 0) and (even[cy, cx] != EVEN or stirred[cy, cx] != 0):
+                even[cy, cx] = SWEPT  # swept whole: even, unless a pair at two temperatures or a cooling cell stirs it
     for r in range(y1 - y0):
         y = y1 - 1 - r if backwards else y0 + r
         cy = y >> CHUNK_SHIFT
@@ -639,7 +640,7 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             cx = first_cx + (segments - 1 - j if backwards else j)
             if awake[cy, cx] == 0 and woken[cy, cx] == 0:
                 continue
-            if even[cy, cx] == 1 and stirred[cy, cx] == 0:
+            if even[cy, cx] == EVEN and stirred[cy, cx] == 0:
                 continue  # one temperature throughout, as its last sweep found
             uneven = False
             sx0 = max(x0, cx << CHUNK_SHIFT)
@@ -682,10 +683,10 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
                             stirred[wy, wx] = 1
             if uneven:
                 stirred[cy, cx] = 1
-    for cy in range(first_cy, last_row_cy + 1):
+    for cy in range(first_cy, end_cy):
         for cx in range(first_cx, first_cx + segments):
-            if even[cy, cx] == 2:
-                even[cy, cx] = 1
+            if even[cy, cx] == SWEPT:
+                even[cy, cx] = EVEN
 
 
 @njit(cache=True, parallel=True)
