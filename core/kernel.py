@@ -80,6 +80,7 @@ _line_point = njit(inline="always", cache=True)(traversal.line_point)
 STATIC = ARCHETYPE_CODES["static"]
 POWDER = ARCHETYPE_CODES["powder"]
 LIQUID = ARCHETYPE_CODES["liquid"]
+GAS = ARCHETYPE_CODES["gas"]
 PARTICLE = ARCHETYPE_CODES["particle"]
 
 DONE = MOVED | REACTED  # flag bits (defined beside world.State) of a cell finished this frame
@@ -204,7 +205,11 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
                     f = flags[y, x]
                     th = thermal[e]
-                    if th != 0 or (f & BURNING) != 0:
+                    # Calm (the common case): not burning, no flame, its heat between its phase changes.
+                    calm = (f & BURNING) == 0 and (
+                        th == 0 or ((th & (FLAMMABLE | IGNITES)) == 0 and cold_limit[e] <= heat[y, x] <= hot_limit[e])
+                    )
+                    if not calm:
                         energy = int(heat[y, x])
                         into = e
                         if energy > hot_limit[e]:
@@ -365,10 +370,23 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         break
                     old_vx = int(vx[y, x])
                     old_vy = int(vy[y, x])
+                    g = fall_dir[e]
+                    ty = y + g  # the cell it falls (rises) into
+                    opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x])
+                    can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
+                    if (kind == LIQUID or kind == GAS) and not opens:
+                        for k in range(4):
+                            nx = x + (1, -1, 1, -1)[k]
+                            ny = y + (g if k < 2 else 0)
+                            if 0 <= nx < width and 0 <= ny < height:
+                                if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
+                                    can_flow = True
+                                    break
+                        if not can_flow and old_vx == 0 and old_vy == 0:
+                            break  # at rest, every move shut: the common case inside a body of liquid
                     cvx = old_vx
                     cvy = old_vy
                     loose = flags[y, x] & LOOSE
-                    g = fall_dir[e]
                     falling = False
                     coasting = False
                     only_empty = kind == PARTICLE
@@ -389,8 +407,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         d0y = _cells_moved(cvy, (r >> 8) & 255)
                         tries = 1 if d0x != 0 or d0y != 0 else 0
                     else:
-                        ty = y + g
-                        if 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x]):
+                        if opens:
                             # Falling (rising): speed up, go at least one cell, drift sideways.
                             falling = True
                             r = _mix32(h ^ SALT_ROUND)
@@ -425,14 +442,6 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         else:
                             # Liquids and gases on the ground: down a side, else flow sideways.
                             cvx = cvy = 0
-                            can_flow = False  # is the first cell of any of its moves open?
-                            for k in range(4):
-                                nx = x + (1, -1, 1, -1)[k]
-                                ny = y + (g if k < 2 else 0)
-                                if 0 <= nx < width and 0 <= ny < height:
-                                    if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
-                                        can_flow = True
-                                        break
                             if can_flow and kind == LIQUID and (h >> 8) < rest_chance[e]:
                                 busy = True  # viscous liquids often rest; stay awake while it could flow
                             elif can_flow:
@@ -539,7 +548,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         cells[py, px] = e
                         shade[y, x], shade[py, px] = shade[py, px], shade[y, x]
                         timer[y, x], timer[py, px] = timer[py, px], timer[y, x]
-                        carry[y, x], carry[py, px] = carry[py, px], carry[y, x]
+                        if kind == PARTICLE:  # only particles carry anything, and they only enter empty cells
+                            carry[y, x], carry[py, px] = carry[py, px], carry[y, x]
                         heat[y, x], heat[py, px] = heat[py, px], heat[y, x]
                         vx[y, x] = vx[py, px]
                         vy[y, x] = vy[py, px]
