@@ -458,6 +458,10 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     py = y
                     hit = False
                     used = -1
+                    if falling and d0x == 0 and d0y == g:  # one cell straight on, into the cell found open above
+                        py = ty
+                        used = 0
+                        tries = 0
                     for a in range(tries):
                         if a == 0:
                             dx, dy = d0x, d0y
