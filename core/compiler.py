@@ -59,6 +59,7 @@ class Tables(NamedTuple):
     life_into: np.ndarray  # uint16[n]: what a cell decays into
     reactive: np.ndarray  # int64[n]: partner mask: bit b % 64 set when the element reacts with some b (0: none)
     displace: np.ndarray  # uint8[n, n]: a moving cell of a may swap with a cell of b
+    displaces: np.ndarray  # int64[n]: mask: bit b % 64 set when a may swap with some b (a first test, like reactive)
     react_chance: np.ndarray  # uint32[n, n]: roll threshold per frame of contact
     react_into_a: np.ndarray  # uint16[n, n]: what a becomes
     react_into_b: np.ndarray  # uint16[n, n]: what b becomes
@@ -349,6 +350,7 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
             t.displace[a] = fluid & lighter
             t.displace[a, a] = 0
             t.displace[a, 0] = 1  # every mover moves into empty cells
+    t.displaces[:] = element_masks(t.displace)
 
 
 @dataclass
@@ -433,6 +435,7 @@ def _empty_tables(n: int) -> Tables:
         life_into=np.zeros(n, np.uint16),
         reactive=np.zeros(n, np.int64),
         displace=np.zeros((n, n), np.uint8),
+        displaces=np.zeros(n, np.int64),
         react_chance=np.zeros((n, n), np.uint32),
         react_into_a=np.zeros((n, n), np.uint16),
         react_into_b=np.zeros((n, n), np.uint16),
@@ -537,16 +540,17 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[Co
     for pair, (_, _, _, (first, second, threshold, low, high, heat)) in winner.items():
         t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
         t.react_tsum_min[pair], t.react_tsum_max[pair], t.react_heat[pair] = low, high, heat
-    t.reactive[:] = partner_masks(t.react_chance)
+    t.reactive[:] = element_masks(t.react_chance)
     problems.extend(_endless_reactions(winner, elements))
     return tuple(compiled)
 
 
-def partner_masks(react_chance: np.ndarray) -> np.ndarray:
-    """Per element, the bits ``b % 64`` of the elements ``b`` it reacts with: a cheap first test of a cell's neighbours."""
-    bits = np.zeros(react_chance.shape[0], np.uint64)
-    for b in np.flatnonzero((react_chance > 0).any(axis=0)):
-        bits[react_chance[:, b] > 0] |= np.uint64(1) << np.uint64(b % 64)
+def element_masks(pairs: np.ndarray) -> np.ndarray:
+    """Per element ``a``, the bits ``b % 64`` of the elements ``b`` with ``pairs[a, b] > 0`` (those it reacts
+    with, or may swap with): a cheap first test of a cell's neighbours, never missing a partner."""
+    bits = np.zeros(pairs.shape[0], np.uint64)
+    for b in np.flatnonzero((pairs > 0).any(axis=0)):
+        bits[pairs[:, b] > 0] |= np.uint64(1) << np.uint64(b % 64)
     return bits.view(np.int64)
 
 

@@ -169,7 +169,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     friction, impact_share, knock_chance, drag_keep = t.friction, t.impact_share, t.knock_chance, t.drag_keep
     dispersion, rest_chance = t.dispersion, t.rest_chance
     life_frames, life_jitter, life_into = t.life_frames, t.life_jitter, t.life_into
-    reactive, displace = t.reactive, t.displace
+    reactive, displace, displaces = t.reactive, t.displace, t.displaces
     react_chance, react_into_a, react_into_b = t.react_chance, t.react_into_a, t.react_into_b
     react_tsum_min, react_tsum_max, react_heat = t.react_tsum_min, t.react_tsum_max, t.react_heat
     heat_cap, heat_recip, temp_start, thermal, cooling = t.heat_cap, t.heat_recip, t.temp_start, t.thermal, t.cooling
@@ -375,13 +375,20 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x])
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
                     if (kind == LIQUID or kind == GAS) and not opens:
+                        near = 0  # first a cheap test: does any of the four hold an element it may displace?
                         for k in range(4):
                             nx = x + (1, -1, 1, -1)[k]
                             ny = y + (g if k < 2 else 0)
                             if 0 <= nx < width and 0 <= ny < height:
-                                if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
-                                    can_flow = True
-                                    break
+                                near |= 1 << (cells[ny, nx] & 63)
+                        if (displaces[e] & near) != 0:
+                            for k in range(4):
+                                nx = x + (1, -1, 1, -1)[k]
+                                ny = y + (g if k < 2 else 0)
+                                if 0 <= nx < width and 0 <= ny < height:
+                                    if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
+                                        can_flow = True
+                                        break
                         if not can_flow and old_vx == 0 and old_vy == 0:
                             break  # at rest, every move shut: the common case inside a body of liquid
                     cvx = old_vx
