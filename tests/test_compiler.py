@@ -82,6 +82,16 @@ def test_density_decides_who_displaces_whom(ruleset):
     assert not d[i("stone")].any()
 
 
+@pytest.mark.parametrize("matrix, masks", [("displace", "displaces"), ("react_chance", "reactive")])
+def test_neighbour_masks_never_miss_a_partner(ruleset, matrix, masks):
+    pairs, bits = getattr(ruleset.tables, matrix), getattr(ruleset.tables, masks).view(np.uint64)
+    assert pairs.any()
+    for a, b in zip(*np.nonzero(pairs)):
+        assert bits[a] >> np.uint64(b % 64) & np.uint64(1), (ruleset.elements[a].id, ruleset.elements[b].id)
+    partnerless = ~(pairs > 0).any(axis=1)
+    assert (bits[partnerless] == 0).all()  # no partners: the kernel's first test ends it at once
+
+
 def test_reactions_fill_the_matrix_both_ways(ruleset):
     t, i = ruleset.tables, ruleset.index
     fire, water = i("fire"), i("water")
