@@ -7,12 +7,14 @@ compare with other engines' and show what sleeping saves.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import resource
 import sys
 import time
 from dataclasses import asdict, dataclass
-from typing import Callable
+from types import ModuleType
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -183,6 +185,106 @@ def run(
         peak_memory_mb=round(peak_memory_mb(), 1),
         state_bytes_per_cell=round(state_bytes(world) / (size * size), 4),
     )
+
+
+class FramesDiffer(Exception):
+    """Two kernels compared by :func:`compare` stepped a scene to different frames."""
+
+    def __init__(self, frame: int):
+        super().__init__(f"the frames differ by frame {frame}")
+        self.frame = frame
+
+
+def load_kernel(path) -> ModuleType:
+    """Another version of ``sandmod/kernel.py`` (say, from ``git show REV:core/kernel.py``), importable
+    beside this one; its relative imports name this sandmod's modules. Raises ValueError if it is none."""
+    name = f"sandmod._kernel_{abs(hash(str(path))):x}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None or spec.loader is None:
+        raise ValueError(f"{path}: not a Python file")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as error:  # its code is older or newer than this sandmod: say why, not where
+        raise ValueError(f"{path}: cannot be imported beside this sandmod ({type(error).__name__}: {error})") from None
+    missing = [f for f in ("step", "take_detonations", "explode") if not callable(getattr(module, f, None))]
+    if missing:
+        raise ValueError(f"{path}: not a sandmod kernel (no {', '.join(missing)})")
+    return module
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Two kernels timed on the same frames; the JSON that ``sandmod bench --against`` prints."""
+
+    scene: str
+    width: int
+    height: int
+    steps: int
+    threads: int
+    mcell_updates_per_second: float  # this kernel
+    against: str
+    against_mcell_updates_per_second: float
+    speedup: float  # this kernel's speed over the other's
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _saved(world: World) -> list[np.ndarray]:
+    return [a.copy() for a in (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations)]
+
+
+def _restore(world: World, saved: list[np.ndarray], frame: int) -> None:
+    for array, copy in zip((*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations), saved):
+        array[...] = copy
+    world.frame = frame
+
+
+def compare(
+    ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, kernels: Sequence, *, segment: int = 25, repeats: int = 3
+) -> list[float]:
+    """Seconds each kernel module takes to step ``scene`` for ``steps`` steps, on the same frames.
+
+    The run is cut into stretches of ``segment`` steps. Each kernel steps each
+    stretch ``repeats`` times from the same state, taking turns, and its best
+    time counts: on a shared machine whose speed drifts from second to second
+    this compares kernels far more closely than whole runs one after the other.
+    The kernels must reach the same state at the end of every stretch, or
+    :class:`FramesDiffer` is raised.
+    """
+    import numba
+
+    numba.set_num_threads(threads)
+    world = World(ruleset, size, size)
+    SCENES[scene](world, ruleset)
+    for kernel in kernels:  # compile, or load from the cache, before timing
+        start, frame = _saved(world), world.frame
+        world.kernel = kernel
+        world.step()
+        _restore(world, start, frame)
+    best = [0.0] * len(kernels)
+    for first in range(0, steps, segment):
+        start, frame = _saved(world), world.frame
+        length = min(segment, steps - first)
+        times = [float("inf")] * len(kernels)
+        ends: list[list[np.ndarray] | None] = [None] * len(kernels)
+        for repeat in range(repeats):
+            for k in range(len(kernels)) if repeat % 2 == 0 else reversed(range(len(kernels))):
+                _restore(world, start, frame)
+                world.kernel = kernels[k]
+                began = time.perf_counter()
+                for _ in range(length):
+                    world.step()
+                times[k] = min(times[k], time.perf_counter() - began)
+                if ends[k] is None:
+                    ends[k] = _saved(world)
+        if any(not all(np.array_equal(a, b) for a, b in zip(ends[0], end)) for end in ends[1:]):
+            raise FramesDiffer(frame + length)
+        _restore(world, ends[0], frame + length)
+        best = [b + t for b, t in zip(best, times)]
+    world.kernel = None
+    return best
 
 
 def max_threads() -> int:

@@ -359,19 +359,27 @@ class World:
         """Set off an explosion centred on cell (x, y) now."""
         self._explode(self.blast_row(x, y, explosion)[None, :], 1)
 
-    def _explode(self, rows: np.ndarray, salt: int) -> None:
-        from .kernel import explode
+    #: The module whose ``step``, ``take_detonations`` and ``explode`` advance this world:
+    #: :mod:`sandmod.kernel` unless set (``sandmod bench --against`` times another version of it).
+    kernel = None
 
+    def _kernel(self):
+        if self.kernel is None:
+            from . import kernel
+
+            return kernel
+        return self.kernel
+
+    def _explode(self, rows: np.ndarray, salt: int) -> None:
         key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
-        explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake, self._even)
+        self._kernel().explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake, self._even)
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
         the kernel updates every cell, explosions go off."""
         from numba import get_num_threads
 
-        from .kernel import step, take_detonations
-
+        kernel = self._kernel()
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
                 self.paint_cells(
@@ -389,7 +397,7 @@ class World:
         for heater in self.heaters:
             if heater.active(self.frame):
                 self.set_temperature(heater.area(self.cells), heater.celsius)
-        went_off = step(
+        went_off = kernel.step(
             self.state,
             self.tables,
             frame_key(self.seed, self.frame, SALT_MOVE),
@@ -404,7 +412,7 @@ class World:
             get_num_threads(),
         )
         if went_off:  # top to bottom, left to right, whichever thread found them
-            self._explode(take_detonations(self.state, self.tables, self._detonations), 0)
+            self._explode(kernel.take_detonations(self.state, self.tables, self._detonations), 0)
         due = [row for frame, row in self.scheduled if frame == self.frame]
         if due:  # the world file's, in its order
             self._explode(np.array(due), 1)

@@ -91,3 +91,51 @@ def test_bench_record_splits_a_render_into_steps_images_and_encoding():
         assert r["images_per_second"] == pytest.approx(3 / r["encode_seconds"], rel=0.05) and 0 < r["encode_share"] < 1
     bad = CliRunner().invoke(cli, ["bench", "--record", "mp4", "--size", "256", "--steps", "1"])
     assert bad.exit_code == 2 and "unknown format 'mp4'" in bad.stderr
+
+
+class _Meddler:
+    """A kernel that steps as sandmod's does, then changes one cell from ``frame`` on."""
+
+    def __init__(self, frame: int):
+        from sandmod import kernel
+
+        self.frame, self.take_detonations, self.explode, self._step = frame, kernel.take_detonations, kernel.explode, kernel.step
+
+    def step(self, s, t, move_key, react_key, spawn_key, frame, *rest):
+        went_off = self._step(s, t, move_key, react_key, spawn_key, frame, *rest)
+        if frame >= self.frame:
+            s.cells[0, 0] = 1 - min(s.cells[0, 0], 1)
+        return went_off
+
+
+def test_compare_times_kernels_that_step_to_the_same_frames(ruleset):
+    from sandmod import kernel
+
+    seconds = benchmark.compare(ruleset, "everything", 64, 30, 1, [kernel, benchmark.load_kernel(Path(kernel.__file__))], segment=8)
+    assert len(seconds) == 2 and min(seconds) > 0
+
+
+def test_compare_finds_the_stretch_where_frames_part(ruleset):
+    from sandmod import kernel
+
+    with pytest.raises(benchmark.FramesDiffer) as differ:
+        benchmark.compare(ruleset, "mix", 64, 40, 1, [kernel, _Meddler(frame=17)], segment=8, repeats=2)
+    assert differ.value.frame == 24  # the end of the stretch of frames 16..23
+
+
+def test_bench_against_another_kernel_file(tmp_path):
+    from sandmod import kernel
+
+    args = ["bench", "--scene", "halves", "--size", "256", "--steps", "6", "--threads", "1", "--json"]
+    result = CliRunner().invoke(cli, [*args, "--against", kernel.__file__], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    run = json.loads(result.stdout)
+    assert run["scene"] == "halves" and run["against"] == kernel.__file__
+    assert run["mcell_updates_per_second"] > 0 and run["against_mcell_updates_per_second"] > 0 and run["speedup"] > 0
+    broken = tmp_path / "kernel.py"
+    broken.write_text("from .no_such_module import step\n")
+    result = CliRunner().invoke(cli, [*args, "--against", str(broken)])
+    assert result.exit_code == 2 and "cannot be imported beside this sandmod (ModuleNotFoundError" in result.output
+    (tmp_path / "other.py").write_text("def step():\n    pass\n")
+    result = CliRunner().invoke(cli, [*args, "--against", str(tmp_path / "other.py")])
+    assert result.exit_code == 2 and "not a sandmod kernel (no take_detonations, explode)" in result.output

@@ -511,7 +511,9 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per run.")
 @click.option("--record", "formats", multiple=True, metavar="FORMAT",
               help="Time rendering instead: an image a step, recorded as FORMAT (repeatable: gif, apng, webp, png-frames).")
-def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats) -> None:
+@click.option("--against", type=click.Path(exists=True, dir_okay=False), metavar="KERNEL.py",
+              help="Compare with another version of the kernel on the same frames (e.g. from git show REV:core/kernel.py).")
+def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, against) -> None:
     """Time the kernel on a built-in scene: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -524,6 +526,11 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats) 
 
     With --record, each step also makes an image and a recorder encodes it:
     prints images encoded a second and encoding's share of the render.
+
+    With --against, this kernel and the other take turns over stretches of
+    25 steps, each stretch three times from the same state, and the best
+    times count: a fair comparison on a machine whose speed drifts. Both
+    must step to the same frames (exit 1 where they do not).
     """
     import os
 
@@ -546,6 +553,9 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats) 
     if formats:
         _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)
         return
+    if against:
+        _bench_against(ruleset, against, scenes, size, steps, thread_counts, as_json)
+        return
     for scene in scenes:
         for threads in thread_counts:
             result = benchmark.run(ruleset, scene, size, steps, threads, sleep=not no_sleep, seed=seed, compile_seconds=compile_seconds)
@@ -558,6 +568,34 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats) 
                 f"{result.mcell_updates_per_second:.1f} million cell-updates/s, {result.awake_fraction:.0%} of chunks awake, "
                 f"compile {result.compile_seconds:.1f} s, peak memory {result.peak_memory_mb:.0f} MB, "
                 f"state {result.state_bytes_per_cell:.2f} bytes/cell"
+            )
+
+
+def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -> None:
+    from sandmod import benchmark, kernel
+
+    try:
+        other = benchmark.load_kernel(path)
+    except ValueError as error:
+        raise click.BadParameter(str(error), param_hint="'--against'") from None
+    cells = size * size * steps / 1e6
+    for scene in scenes:
+        for threads in thread_counts:
+            try:
+                ours, theirs = benchmark.compare(ruleset, scene, size, steps, threads, [kernel, other])
+            except benchmark.FramesDiffer as differ:
+                click.echo(f"error: {scene}: {path} steps to other frames than this kernel (by frame {differ.frame})", err=True)
+                sys.exit(1)
+            result = benchmark.Comparison(
+                scene, size, size, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3)
+            )
+            if as_json:
+                click.echo(json.dumps(result.as_dict()))
+                continue
+            click.echo(
+                f"{scene} {size}x{size}, {steps} steps, {threads} thread{'s' * (threads > 1)}: "
+                f"this kernel {result.mcell_updates_per_second:.1f} million cell-updates/s, {path} "
+                f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, same frames"
             )
 
 
