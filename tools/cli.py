@@ -559,16 +559,24 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     for scene in scenes:
         for threads in thread_counts:
             result = benchmark.run(ruleset, scene, size, steps, threads, sleep=not no_sleep, seed=seed, compile_seconds=compile_seconds)
-            if as_json:
-                click.echo(json.dumps(result.as_dict()))
-                continue
-            click.echo(
-                f"{scene} {size}x{size}, {steps} steps, {threads} thread{'s' * (threads > 1)}"
+            _report(
+                result,
+                as_json,
+                f"{scene} {size}x{size}, {steps} steps, {_threads(threads)}"
                 f"{', no sleeping' if no_sleep else ''}: {result.steps_per_second:.1f} steps/s, "
                 f"{result.mcell_updates_per_second:.1f} million cell-updates/s, {result.awake_fraction:.0%} of chunks awake, "
                 f"compile {result.compile_seconds:.1f} s, peak memory {result.peak_memory_mb:.0f} MB, "
-                f"state {result.state_bytes_per_cell:.2f} bytes/cell"
+                f"state {result.state_bytes_per_cell:.2f} bytes/cell",
             )
+
+
+def _threads(count: int) -> str:
+    return f"{count} thread{'s' * (count > 1)}"
+
+
+def _report(result, as_json: bool, line: str) -> None:
+    """One bench run: its JSON object, or a line for people."""
+    click.echo(json.dumps(result.as_dict()) if as_json else line)
 
 
 def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -> None:
@@ -589,13 +597,12 @@ def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -
             result = benchmark.Comparison(
                 scene, size, size, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3)
             )
-            if as_json:
-                click.echo(json.dumps(result.as_dict()))
-                continue
-            click.echo(
-                f"{scene} {size}x{size}, {steps} steps, {threads} thread{'s' * (threads > 1)}: "
+            _report(
+                result,
+                as_json,
+                f"{scene} {size}x{size}, {steps} steps, {_threads(threads)}: "
                 f"this kernel {result.mcell_updates_per_second:.1f} million cell-updates/s, {path} "
-                f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, same frames"
+                f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, same frames",
             )
 
 
@@ -614,13 +621,12 @@ def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_js
             for name in formats:
                 with tempfile.TemporaryDirectory() as folder:
                     result = benchmark.record(ruleset, registry.recorders[name].value, scene, size, steps, threads, folder)
-                if as_json:
-                    click.echo(json.dumps(result.as_dict()))
-                    continue
-                click.echo(
-                    f"{name} {scene} {size}x{size}, {steps} images, {threads} thread{'s' * (threads > 1)}: "
+                _report(
+                    result,
+                    as_json,
+                    f"{name} {scene} {size}x{size}, {steps} images, {_threads(threads)}: "
                     f"encoding {result.images_per_second:.0f} images/s ({result.encode_share:.0%} of the render), "
-                    f"images {steps / result.image_seconds:.0f}/s, steps {steps / result.step_seconds:.0f}/s, {result.file_mb:.2f} MB"
+                    f"images {steps / result.image_seconds:.0f}/s, steps {steps / result.step_seconds:.0f}/s, {result.file_mb:.2f} MB",
                 )
 
 
