@@ -7,12 +7,14 @@ compare with other engines' and show what sleeping saves.
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 import os
 import resource
 import sys
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from types import ModuleType
 from typing import Callable, Sequence
 
@@ -198,14 +200,20 @@ class FramesDiffer(Exception):
 def load_kernel(path) -> ModuleType:
     """Another version of ``sandmod/kernel.py`` (say, from ``git show REV:core/kernel.py``), importable
     beside this one; its relative imports name this sandmod's modules. Raises ValueError if it is none."""
-    name = f"sandmod._kernel_{abs(hash(str(path))):x}"
+    # One name per file, the same in every process, and registered: numba's cache records the module
+    # of what it compiled and imports it by that name when it loads the cached code.
+    name = "sandmod._kernel_" + hashlib.sha1(str(Path(path).resolve()).encode()).hexdigest()[:12]
+    if name in sys.modules:
+        return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, path)
     if spec is None or spec.loader is None:
         raise ValueError(f"{path}: not a Python file")
     module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
     try:
         spec.loader.exec_module(module)
     except Exception as error:  # its code is older or newer than this sandmod: say why, not where
+        del sys.modules[name]
         raise ValueError(f"{path}: cannot be imported beside this sandmod ({type(error).__name__}: {error})") from None
     missing = [f for f in ("step", "take_detonations", "explode") if not callable(getattr(module, f, None))]
     if missing:
@@ -315,7 +323,6 @@ class RecordResult:
 
 def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threads: int, folder) -> RecordResult:
     """Render ``images`` steps of ``scene`` with ``recorder`` into ``folder``, timing each part."""
-    from pathlib import Path
 
     import numba
 

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -139,3 +142,15 @@ def test_bench_against_another_kernel_file(tmp_path):
     (tmp_path / "other.py").write_text("def step():\n    pass\n")
     result = CliRunner().invoke(cli, [*args, "--against", str(tmp_path / "other.py")])
     assert result.exit_code == 2 and "not a sandmod kernel (no take_detonations, explode)" in result.output
+
+
+def test_a_kernel_file_loads_from_numbas_cache_in_a_later_process(tmp_path):
+    # numba's cache imports the module of what it compiled by name: a second process must find it.
+    (tmp_path / "kernel.py").write_text(
+        "from numba import njit\n\n\n@njit(cache=True)\ndef step(x):\n    return x + 1\n\n\ntake_detonations = explode = step\n"
+    )
+    code = f"from sandmod import benchmark; print(benchmark.load_kernel({str(tmp_path / 'kernel.py')!r}).step(1))"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    for _ in range(2):  # compiled and cached, then loaded from the cache
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+        assert (done.returncode, done.stdout.strip()) == (0, "2"), done.stderr
