@@ -372,25 +372,30 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     old_vy = int(vy[y, x])
                     g = fall_dir[e]
                     ty = y + g  # the cell it falls (rises) into
+                    fluid = kind == LIQUID or kind == GAS
+                    if fluid and old_vx == 0 and old_vy == 0:
+                        # At rest, first a cheap test of its five moves' cells (on, down a side, sideways):
+                        # holds none an element it may displace? Then it stays put, as most of a body of liquid does.
+                        near = 0
+                        for k in range(5):
+                            nx = x + (0, 1, -1, 1, -1)[k]
+                            ny = y + (g if k < 3 else 0)
+                            if 0 <= nx < width and 0 <= ny < height:
+                                near |= 1 << (cells[ny, nx] & 63)
+                        if (displaces[e] & near) == 0:
+                            break
                     opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x])
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
-                    if (kind == LIQUID or kind == GAS) and not opens:
-                        near = 0  # first a cheap test: does any of the four hold an element it may displace?
+                    if fluid and not opens:
                         for k in range(4):
                             nx = x + (1, -1, 1, -1)[k]
                             ny = y + (g if k < 2 else 0)
                             if 0 <= nx < width and 0 <= ny < height:
-                                near |= 1 << (cells[ny, nx] & 63)
-                        if (displaces[e] & near) != 0:
-                            for k in range(4):
-                                nx = x + (1, -1, 1, -1)[k]
-                                ny = y + (g if k < 2 else 0)
-                                if 0 <= nx < width and 0 <= ny < height:
-                                    if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
-                                        can_flow = True
-                                        break
+                                if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
+                                    can_flow = True
+                                    break
                         if not can_flow and old_vx == 0 and old_vy == 0:
-                            break  # at rest, every move shut: the common case inside a body of liquid
+                            break  # at rest, every move shut (by cells done this frame)
                     cvx = old_vx
                     cvy = old_vy
                     loose = flags[y, x] & LOOSE
