@@ -239,12 +239,17 @@ class Comparison:
         return asdict(self)
 
 
+def _arrays(world: World) -> tuple[np.ndarray, ...]:
+    """Everything a step reads or writes: the cells' state and the chunks' marks."""
+    return (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations)
+
+
 def _saved(world: World) -> list[np.ndarray]:
-    return [a.copy() for a in (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations)]
+    return [a.copy() for a in _arrays(world)]
 
 
 def _restore(world: World, saved: list[np.ndarray], frame: int) -> None:
-    for array, copy in zip((*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations), saved):
+    for array, copy in zip(_arrays(world), saved):
         array[...] = copy
     world.frame = frame
 
@@ -323,7 +328,6 @@ class RecordResult:
 
 def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threads: int, folder) -> RecordResult:
     """Render ``images`` steps of ``scene`` with ``recorder`` into ``folder``, timing each part."""
-
     import numba
 
     from .recording import VideoSettings, output_bytes
