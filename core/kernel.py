@@ -387,9 +387,9 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x])
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
                     if fluid and not opens:
-                        for k in range(4):
-                            nx = x + (1, -1, 1, -1)[k]
-                            ny = y + (g if k < 2 else 0)
+                        for k in range(1, 5):  # the same cells as above, less the one below
+                            nx = x + (0, 1, -1, 1, -1)[k]
+                            ny = y + (g if k < 3 else 0)
                             if 0 <= nx < width and 0 <= ny < height:
                                 if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
                                     can_flow = True
