@@ -721,11 +721,12 @@ def clear_marks(flags, awake):
     height, width = flags.shape
     chunks_y, chunks_x = awake.shape
     for cy in prange(chunks_y):
-        for cx in range(chunks_x):
-            if awake[cy, cx] != 0:
-                for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
-                    for x in range(cx << CHUNK_SHIFT, min((cx + 1) << CHUNK_SHIFT, width)):
-                        flags[y, x] &= KEPT
+        for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
+            row = flags[y]
+            for cx in range(chunks_x):
+                if awake[cy, cx] != 0:
+                    run = row[cx << CHUNK_SHIFT : min((cx + 1) << CHUNK_SHIFT, width)]
+                    run &= np.uint8(KEPT)  # a whole-slice operation: numba vectorises it, a loop it did not
 
 
 @njit(cache=True, parallel=True)

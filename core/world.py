@@ -345,7 +345,7 @@ class World:
     @property
     def awake_fraction(self) -> float:
         """The share of chunks the next step will update (woken ones not counted)."""
-        return float(self.awake.mean())
+        return np.count_nonzero(self.awake) / self.awake.size
 
     def heat_total(self) -> int:
         """The sum of every cell's heat energy (conduction keeps it; sources and cooling change it)."""
