@@ -71,7 +71,21 @@ from .compiler import (  # noqa: E402
     TEMP_ONE,
 )
 from .modspec import MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: E402
-from .world import BURNING, CHUNK_SHIFT, DETONATING, LOOSE, MOVED, REACTED, SCORCHED, TILE, TILE_SHIFT, WAKE_MARGIN  # noqa: E402
+from .world import (  # noqa: E402
+    BURNING,
+    CHUNK,
+    CHUNK_SHIFT,
+    DETONATING,
+    LOOSE,
+    MOVED,
+    PART,
+    REACTED,
+    SCORCHED,
+    TILE,
+    TILE_SHIFT,
+    WAKE_MARGIN,
+    WHOLE,
+)
 
 _mix32 = njit(inline="always", cache=True)(hashing.mix32)
 _spawn_state = njit(inline="always", cache=True)(hashing.spawn_state)
@@ -151,6 +165,36 @@ def _cooling_loss(energy, cap, cooling, ambient):
     return _scaled(_energy(ambient, cap) - energy, cooling) if cooling != 0 else 0
 
 
+@njit(inline="always", cache=True)
+def _widened(mark, y0, y1):
+    """A chunk's wake mark (see :data:`sandmod.world.WHOLE`) widened to cover its rows y0..y1 (chunk-local)."""
+    if mark == WHOLE:
+        return WHOLE
+    if mark != 0:
+        y0 = min(y0, mark & 63)
+        y1 = max(y1, (mark >> 6) & 63)
+    if y0 == 0 and y1 == CHUNK - 1:
+        return WHOLE  # quicker to read, and to widen
+    return PART | y0 | (y1 << 6)
+
+
+@njit(inline="always", cache=True)
+def _covers(mark, row):
+    """Does a chunk's wake mark cover its (chunk-local) row?"""
+    return mark == WHOLE or (mark != 0 and (mark & 63) <= row <= ((mark >> 6) & 63))
+
+
+@njit(inline="always", cache=True)
+def _wake(woken, stirred, stir, x0, y0, x1, y1):
+    """Mark the cells x0..x1, y0..y1 (in the world, inclusive) in the wake marks of their chunks, and stir those chunks if ``stir``."""
+    for wy in range(y0 >> CHUNK_SHIFT, (y1 >> CHUNK_SHIFT) + 1):
+        oy = wy << CHUNK_SHIFT
+        for wx in range(x0 >> CHUNK_SHIFT, (x1 >> CHUNK_SHIFT) + 1):
+            woken[wy, wx] = _widened(woken[wy, wx], max(y0 - oy, 0), min(y1 - oy, CHUNK - 1))
+            if stir:
+                stirred[wy, wx] = 1
+
+
 @njit(cache=True)
 def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
@@ -188,8 +232,10 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
         forward = ((frame + y) & 1) == 0
         for j in range(segments):
             cx = first_cx + (j if forward else segments - 1 - j)
-            if awake[cy, cx] == 0 and woken[cy, cx] == 0:
-                continue  # asleep: nothing here or next to it changed
+            woke = np.int64(woken[cy, cx])  # this chunk's new mark, kept here while its row is updated
+            row = y - (cy << CHUNK_SHIFT)
+            if not (_covers(awake[cy, cx], row) or _covers(woke, row)):
+                continue  # asleep: nothing in this row of the chunk or within two cells of it changed
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
             for i in range(sx1 - sx0):
@@ -608,21 +654,22 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 flags[ny, nx] |= LOOSE
                                 vx[ny, nx] = push * KNOCK_SPEED
 
-                if busy:  # wake every chunk within two cells of the cells it moved between
-                    wy0 = max(by0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT
-                    wy1 = min(by1 + WAKE_MARGIN, height - 1) >> CHUNK_SHIFT
-                    wx0 = max(bx0 - WAKE_MARGIN, 0) >> CHUNK_SHIFT
-                    wx1 = min(bx1 + WAKE_MARGIN, width - 1) >> CHUNK_SHIFT
-                    if wy0 == wy1 and wx0 == wx1:  # the common case: well inside one chunk
-                        woken[wy0, wx0] = 1
+                if busy:  # wake every cell within two cells of the cells it moved between
+                    wx0 = max(bx0 - WAKE_MARGIN, 0)
+                    wy0 = max(by0 - WAKE_MARGIN, 0)
+                    wx1 = min(bx1 + WAKE_MARGIN, width - 1)
+                    wy1 = min(by1 + WAKE_MARGIN, height - 1)
+                    if wy0 >> CHUNK_SHIFT == wy1 >> CHUNK_SHIFT and wx0 >> CHUNK_SHIFT == wx1 >> CHUNK_SHIFT:
+                        # The common case: well inside this chunk.
+                        if woke != WHOLE:
+                            woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))
                         if stir:
-                            stirred[wy0, wx0] = 1
+                            stirred[cy, cx] = 1
                     else:
-                        for wy in range(wy0, wy1 + 1):
-                            for wx in range(wx0, wx1 + 1):
-                                woken[wy, wx] = 1
-                                if stir:
-                                    stirred[wy, wx] = 1
+                        woken[cy, cx] = woke
+                        _wake(woken, stirred, stir, wx0, wy0, wx1, wy1)
+                        woke = np.int64(woken[cy, cx])
+            woken[cy, cx] = woke
 
 
 @njit(cache=True)
@@ -651,7 +698,6 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     heat_cap, heat_recip, conductance, cooling = t.heat_cap, t.heat_recip, t.conductance, t.cooling
     ambient = int(t.temp_start[0])  # the air's temperature is the world's outside
     backwards = (frame & 1) == 1
-    last_cx, last_cy = (width - 1) >> CHUNK_SHIFT, (height - 1) >> CHUNK_SHIFT
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
     first_cy, end_cy = y0 >> CHUNK_SHIFT, ((y1 - 1) >> CHUNK_SHIFT) + 1
@@ -702,11 +748,8 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
                         heat[y, x] = energy
                         heat[ny, nx] = other + flow
                         changed = True
-                if changed:  # wake (and stir) the chunks of the cells next to it and to its partners
-                    for wy in range(max(y - 1, 0) >> CHUNK_SHIFT, min((y + 2) >> CHUNK_SHIFT, last_cy) + 1):
-                        for wx in range(max(x - 1, 0) >> CHUNK_SHIFT, min((x + 2) >> CHUNK_SHIFT, last_cx) + 1):
-                            woken[wy, wx] = 1
-                            stirred[wy, wx] = 1
+                if changed:  # wake (and stir) the cells next to it and to its partners
+                    _wake(woken, stirred, True, max(x - 1, 0), max(y - 1, 0), min(x + 2, width - 1), min(y + 2, height - 1))
             if uneven:
                 stirred[cy, cx] = 1
     for cy in range(first_cy, end_cy):

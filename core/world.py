@@ -66,6 +66,11 @@ TILE_SHIFT = CHUNK_SHIFT + 1
 TILE = 1 << TILE_SHIFT
 WAKE_MARGIN = 2
 REACH = MAX_SPEED + 1
+# A chunk's wake mark (World.awake, and the kernel's scratch of chunks woken during a
+# step): 0 asleep; WHOLE: every row; else PART | y0 | y1 << 6: only the rows y0..y1
+# (chunk-local, inclusive), those within WAKE_MARGIN of a change. Marks only widen.
+WHOLE = 1
+PART = 1 << 15
 assert 2 * (REACH + WAKE_MARGIN) < TILE, "tiles of one pass must not reach each other's chunks"
 
 
@@ -199,8 +204,8 @@ class World:
             heat=np.zeros(shape, np.int32),
         )
         chunks = (-(-height // CHUNK), -(-width // CHUNK))
-        self.awake = np.ones(chunks, np.uint8)  # chunks to update on the next step
-        self._woken = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks woken during a step
+        self.awake = np.ones(chunks, np.uint16)  # wake marks: which chunks (and cells of them) to update on the next step
+        self._woken = np.zeros(chunks, np.uint16)  # the kernel's scratch: wake marks made during a step
         self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
         self._stirred = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
         self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step

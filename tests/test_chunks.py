@@ -13,7 +13,7 @@ import pytest
 
 from conftest import make_world, run
 from sandmod.loading import load_world
-from sandmod.world import CHUNK, TILE
+from sandmod.world import CHUNK, PART, TILE, WAKE_MARGIN, WHOLE
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -133,6 +133,24 @@ def test_a_chunk_wakes_where_it_is_touched_and_sleeps_again(ruleset):
             break
     assert world.awake_fraction == 0.0 and world.frame < 100
     assert (world.cells[:59] == 0).all() and (world.cells[59] != 0).sum() == 1  # it lies on the sand
+
+
+def test_a_chunk_updates_only_the_rows_near_a_change(ruleset):
+    sand = ruleset.index("sand")
+    world = run(make_world(ruleset, ["." * 100] * 60 + ["S" * 100] * 20), 5)
+    world.paint_cells(np.array([2]), np.array([70]), sand)
+    assert world.awake[0, 70 // CHUNK] == WHOLE  # painting wakes whole chunks
+    world.step()
+    (y,) = np.nonzero(world.cells[:CHUNK, 70])  # the grain fell a cell or two
+    assert world.awake[0, 70 // CHUNK] == PART | 0 | (y[0] + WAKE_MARGIN) << 6  # rows 0 .. its row + 2
+    # A grain written straight into the state, far below those rows, is not noticed...
+    world.state.cells[20, 75] = sand
+    world.step()
+    assert world.cells[20, 75] == sand
+    # ...until the world is told (what every method that changes cells does).
+    world.wake()
+    world.step()
+    assert world.cells[20, 75] == 0
 
 
 def test_an_explosion_wakes_what_it_reaches(ruleset):
