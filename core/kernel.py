@@ -8,8 +8,8 @@ never the compiled code.
 Order within a frame: tiles of 64 x 64 cells in four passes by their
 parity, the tiles of a pass in parallel (:func:`step`); within a tile, heat
 first (:func:`conduct`), then rows bottom-up, the horizontal direction
-alternating with the row and the frame (:func:`step_region`). Only awake
-chunks (32 x 32) are touched. A cell is updated once: its lifetime ticks, it
+alternating with the row and the frame (:func:`step_region`). Only the
+rows of the awake chunks (32 x 32) that their wake marks name are touched. A cell is updated once: its lifetime ticks, it
 may react with a touching neighbour, and then it moves by its archetype. A
 cell that moved or changed this frame is marked and left alone for the rest
 of the frame.
@@ -199,10 +199,11 @@ def _wake(woken, stirred, stir, x0, y0, x1, y1):
 def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
-    A chunk's cells are updated when it is ``awake`` (from last frame) or
-    ``woken`` (by a change nearby earlier this frame). Every change, and every
-    chance that did not come up, wakes the chunks within two cells of where it
-    happened in ``woken``, and where an element or a heat changed, other than
+    A row of a chunk is updated when the chunk's mark in ``awake`` (from last
+    frame) or ``woken`` (by a change nearby earlier this frame) covers it (see
+    :data:`sandmod.world.WHOLE`). Every change, and every chance that did not
+    come up, widens the ``woken`` marks to the rows within two cells of where
+    it happened, and where an element or a heat changed, other than
     by two cells of one temperature trading places, in ``stirred`` too (see
     :func:`conduct`). Explosives that go off are marked DETONATING and
     counted in ``detonations[tile]``, for :func:`take_detonations` after the step.
