@@ -718,6 +718,7 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             uneven = False
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
+            changed_x0, changed_x1 = sx1, sx0 - 1  # the first and last cell of the segment whose heat changed
             for i in range(sx1 - sx0):
                 x = sx1 - 1 - i if backwards else sx0 + i
                 e = cells[y, x]
@@ -749,8 +750,11 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
                         heat[y, x] = energy
                         heat[ny, nx] = other + flow
                         changed = True
-                if changed:  # wake (and stir) the cells next to it and to its partners
-                    _wake(woken, stirred, True, max(x - 1, 0), max(y - 1, 0), min(x + 2, width - 1), min(y + 2, height - 1))
+                if changed:
+                    changed_x0 = min(changed_x0, x)
+                    changed_x1 = max(changed_x1, x)
+            if changed_x0 <= changed_x1:  # wake (and stir) the cells next to them and to their partners
+                _wake(woken, stirred, True, max(changed_x0 - 1, 0), max(y - 1, 0), min(changed_x1 + 2, width - 1), min(y + 2, height - 1))
             if uneven:
                 stirred[cy, cx] = 1
     for cy in range(first_cy, end_cy):
