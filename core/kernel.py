@@ -9,10 +9,10 @@ Order within a frame: tiles of 64 x 64 cells in four passes by their
 parity, the tiles of a pass in parallel (:func:`step`); within a tile, heat
 first (:func:`conduct`), then rows bottom-up, the horizontal direction
 alternating with the row and the frame (:func:`step_region`). Only the
-rows of the awake chunks (32 x 32) that their wake marks name are touched. A cell is updated once: its lifetime ticks, it
-may react with a touching neighbour, and then it moves by its archetype. A
-cell that moved or changed this frame is marked and left alone for the rest
-of the frame.
+rows of the awake chunks (32 x 32) that their wake marks name are touched. A
+cell is updated once: its lifetime ticks, it may react with a touching
+neighbour, and then it moves by its archetype. A cell that moved or changed
+this frame is marked and left alone for the rest of the frame.
 
 Movement. Movers (powders, liquids, gases) carry a velocity in 1/256ths of a
 cell per frame. While the cell below (above, for rising gases) is open they
@@ -801,8 +801,8 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     farther than anything one cell does can reach, so they are updated at the
     same time on as many threads as there are, with the same result as one
     after another. Within a tile, heat flows first, then the cells move. Only
-    chunks that are awake are touched; ``awake`` then holds the chunks to
-    update next frame. ``even`` marks chunks whose heat needs no sweep (see
+    the rows of chunks that ``awake``'s marks name are touched; ``awake``
+    then holds the marks for the next frame. ``even`` marks chunks whose heat needs no sweep (see
     :func:`conduct`). ``hands``, the number of threads, only decides which
     thread takes which tile.
     """

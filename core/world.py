@@ -204,7 +204,7 @@ class World:
             heat=np.zeros(shape, np.int32),
         )
         chunks = (-(-height // CHUNK), -(-width // CHUNK))
-        self.awake = np.ones(chunks, np.uint16)  # wake marks: which chunks (and cells of them) to update on the next step
+        self.awake = np.ones(chunks, np.uint16)  # wake marks: which chunks (and rows of them) to update on the next step
         self._woken = np.zeros(chunks, np.uint16)  # the kernel's scratch: wake marks made during a step
         self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
         self._stirred = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
