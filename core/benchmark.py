@@ -294,8 +294,8 @@ def compare(
                 times[k] = min(times[k], time.perf_counter() - began)
                 if ends[k] is None:
                     ends[k] = _saved(world)
-        cells = len(world.state)  # the frames; the chunks' marks may differ, as one kernel may wake finer than another
-        if any(not all(np.array_equal(a, b) for a, b in zip(ends[0][:cells], end[:cells])) for end in ends[1:]):
+        frames = len(world.state)  # the cells' arrays come first; the chunks' marks may differ, as one kernel may wake finer than another
+        if any(not all(np.array_equal(a, b) for a, b in zip(ends[0][:frames], end[:frames])) for end in ends[1:]):
             raise FramesDiffer(frame + length)
         _restore(world, ends[0], frame + length)
         best = [b + t for b, t in zip(best, times)]

@@ -166,6 +166,12 @@ def _cooling_loss(energy, cap, cooling, ambient):
 
 
 @njit(inline="always", cache=True)
+def _fluid_move_cell(x, y, g, k):
+    """The first cell of a liquid's or gas's move k (0: on, 1 and 2: on and to a side, 3 and 4: to a side)."""
+    return x + (0, 1, -1, 1, -1)[k], y + (g if k < 3 else 0)
+
+
+@njit(inline="always", cache=True)
 def _widened(mark, y0, y1):
     """A chunk's wake mark (see :data:`sandmod.world.WHOLE`) widened to cover its rows y0..y1 (chunk-local)."""
     if mark == WHOLE:
@@ -425,8 +431,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         # holds none an element it may displace? Then it stays put, as most of a body of liquid does.
                         near = 0
                         for k in range(5):
-                            nx = x + (0, 1, -1, 1, -1)[k]
-                            ny = y + (g if k < 3 else 0)
+                            nx, ny = _fluid_move_cell(x, y, g, k)
                             if 0 <= nx < width and 0 <= ny < height:
                                 near |= 1 << (cells[ny, nx] & 63)
                         if (displaces[e] & near) == 0:
@@ -435,8 +440,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
                     if fluid and not opens:
                         for k in range(1, 5):  # the same cells as above, less the one below
-                            nx = x + (0, 1, -1, 1, -1)[k]
-                            ny = y + (g if k < 3 else 0)
+                            nx, ny = _fluid_move_cell(x, y, g, k)
                             if 0 <= nx < width and 0 <= ny < height:
                                 if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
                                     can_flow = True
@@ -802,9 +806,9 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     same time on as many threads as there are, with the same result as one
     after another. Within a tile, heat flows first, then the cells move. Only
     the rows of chunks that ``awake``'s marks name are touched; ``awake``
-    then holds the marks for the next frame. ``even`` marks chunks whose heat needs no sweep (see
-    :func:`conduct`). ``hands``, the number of threads, only decides which
-    thread takes which tile.
+    then holds the marks for the next frame. ``even`` marks chunks whose heat
+    needs no sweep (see :func:`conduct`). ``hands``, the number of threads,
+    only decides which thread takes which tile.
     """
     flags = s.flags
     height, width = flags.shape
@@ -911,7 +915,7 @@ def explode(s, t, blasts, count, key, particle, awake, even):
         reach = radius + scorch
         for wy in range(max(cy - reach - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((cy + reach + WAKE_MARGIN) >> CHUNK_SHIFT, awake.shape[0] - 1) + 1):
             for wx in range(max(cx - reach - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min((cx + reach + WAKE_MARGIN) >> CHUNK_SHIFT, awake.shape[1] - 1) + 1):
-                awake[wy, wx] = 1
+                awake[wy, wx] = WHOLE
                 even[wy, wx] = 0
         # 0: untouched; 1: destroyed; 2 + d: fringe cell d cells past the destruction (the nearest ray's d).
         mark = np.zeros((2 * reach + 1, 2 * reach + 1), np.int16)

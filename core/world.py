@@ -334,7 +334,7 @@ class World:
         directly must call it too, or chunks at rest will not notice the change.
         """
         if ys is None or xs is None:
-            self.awake[:] = 1
+            self.awake[:] = WHOLE
             self._even[:] = 0
             return
         ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
@@ -344,7 +344,7 @@ class World:
             for dx in (-WAKE_MARGIN, WAKE_MARGIN):
                 cy = np.clip(ys + dy, 0, self.height - 1) >> CHUNK_SHIFT
                 cx = np.clip(xs + dx, 0, self.width - 1) >> CHUNK_SHIFT
-                self.awake[cy, cx] = 1
+                self.awake[cy, cx] = WHOLE
                 self._even[cy, cx] = 0
 
     @property
