@@ -74,7 +74,9 @@ def load_snapshot(world: World, path: Path) -> list[str]:
     expected = {n: getattr(world.state, n) for n in State._fields}
     for key, like in expected.items():
         got = arrays.get(key)
-        if got is None or got.shape != like.shape or got.dtype != like.dtype:
+        # Element numbers are remapped below, so any unsigned width will do (older files' carry was uint16).
+        same_kind = got is not None and (got.dtype == like.dtype or (key in ELEMENT_ARRAYS and got.dtype.kind == "u"))
+        if not same_kind or got.shape != like.shape:
             raise fail(f"its '{key}' array is missing or not {like.dtype} of {like.shape[1]}x{like.shape[0]}")
     ids: list[str] = meta["elements"]
     used = np.zeros(len(ids), bool)

@@ -19,9 +19,10 @@ EXAMPLES = Path(__file__).parent.parent / "examples"
 
 
 def digest(world) -> str:
+    """A hash of every cell's state: its values, whatever width each array stores them in."""
     h = hashlib.sha256()
     for array in world.state:
-        h.update(array.tobytes())
+        h.update(array.astype(np.int64).tobytes())
     return h.hexdigest()
 
 

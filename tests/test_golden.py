@@ -17,9 +17,9 @@ from sandmod.world import World
 from test_chunks import digest
 
 GOLDEN = {
-    "mix": "3bf6a1cad6d0b735ed065404369afd4ae287f3d462bb578695dd4ace7e78245e",
-    "halves": "950aee83c382ec37377d786530f1ca604634afcc74f924851d83109efc77323b",
-    "everything": "f5c0450be061aa876edcf5a0109a6f9dc09bf5715c21e7f1e48250ff460cc05f",
+    "mix": "45f1a1775dee44bf8ddc4f6fd07d1b597f956b260e2f0f4b9b75f6232f7a62e3",
+    "halves": "223a32a83683e5827cb234ec6785ef16ae9951d876f123fc5e06c8fb3b2fe845",
+    "everything": "c389cccc4eacfc21787863f1d9e9321dc49a05e68febc705e4a67792b941355b",
 }
 
 

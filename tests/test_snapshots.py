@@ -62,6 +62,27 @@ def test_elements_are_mapped_by_name_across_other_mods(tmp_path):
         load_snapshot(no_water, tmp_path / "s.npz")
 
 
+
+def test_a_snapshot_with_a_wider_carry_array_still_loads(tmp_path):
+    """Snapshots written before ``carry`` became uint8 held it as uint16; their flying cargo lands the same."""
+    ruleset = load_ruleset(["sand"])
+    world = World(ruleset, 16, 16, seed=5)
+    ys, xs = np.full(4, 2), np.arange(4, 8)
+    world.paint_cells(ys, xs, ruleset.index("sand"))
+    assert world.launch(ys, xs, 1.5, -0.5) == 4
+    save_snapshot(world, tmp_path / "now.npz")
+    with np.load(tmp_path / "now.npz") as data:
+        arrays = {key: data[key] for key in data.files}
+    arrays["carry"] = arrays["carry"].astype(np.uint16)
+    np.savez_compressed(tmp_path / "old.npz", **arrays)
+    old = World(ruleset, 16, 16)
+    assert load_snapshot(old, tmp_path / "old.npz") == []
+    assert old.state.carry.dtype == np.uint8 and (old.state.carry == world.state.carry).all()
+    for _ in range(30):
+        world.step()
+        old.step()
+    same_state(old, world)
+
 def test_cli_continues_from_a_snapshot_to_the_same_last_frame(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     world = str(EXAMPLES / "demolition.toml")
