@@ -143,7 +143,7 @@ def peak_memory_mb() -> float:
 def state_bytes(world: World) -> int:
     """Bytes of everything a world keeps between steps: its cells and its chunks' bookkeeping."""
     chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations)
-    return sum(a.nbytes for a in world.state) + sum(a.nbytes for a in chunks)
+    return sum(a.nbytes for a in world.state) + sum((a if a.base is None else a.base).nbytes for a in chunks)
 
 
 def warm_up(ruleset: Ruleset) -> float:

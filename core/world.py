@@ -183,6 +183,19 @@ class Heater:
         return self.start <= frame < self.stop
 
 
+CACHE_LINE = 64  # bytes
+
+
+def _on_own_lines(shape: tuple[int, int], dtype) -> np.ndarray:
+    """A zeroed per-chunk array whose every entry lies on a cache line of its own.
+
+    Threads updating tiles side by side write these marks many times a frame;
+    sharing lines, the cores would pass each line back and forth at every write.
+    """
+    spread = CACHE_LINE // np.dtype(dtype).itemsize
+    return np.zeros((shape[0], shape[1] * spread), dtype)[:, ::spread]
+
+
 class World:
     """A grid of cells under one ruleset and seed; ``gravity`` scales every element's."""
 
@@ -205,9 +218,9 @@ class World:
         )
         chunks = (-(-height // CHUNK), -(-width // CHUNK))
         self.awake = np.ones(chunks, np.uint16)  # wake marks: which chunks (and rows of them) to update on the next step
-        self._woken = np.zeros(chunks, np.uint16)  # the kernel's scratch: wake marks made during a step
+        self._woken = _on_own_lines(chunks, np.uint16)  # the kernel's scratch: wake marks made during a step
         self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
-        self._stirred = np.zeros(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
+        self._stirred = _on_own_lines(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
         self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []

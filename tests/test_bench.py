@@ -68,7 +68,8 @@ def test_the_first_render_of_a_version_says_it_compiles(tmp_path, monkeypatch):
 def test_state_is_fifteen_bytes_a_cell_and_a_little_per_chunk(ruleset):
     world = World(ruleset, 512, 512)
     assert sum(a.nbytes for a in world.state) == 15 * 512 * 512
-    assert np.isclose(benchmark.state_bytes(world) / 512**2, 15, atol=0.01)
+    # The chunks' marks, the two that threads write a cache line each, count too: within the issue's 16.
+    assert 15.1 < benchmark.state_bytes(world) / 512**2 < 15.2
 
 
 def test_patch_scene_keeps_its_work_in_its_box(ruleset):

@@ -13,7 +13,7 @@ import pytest
 
 from conftest import make_world, run
 from sandmod.loading import load_world
-from sandmod.world import CHUNK, PART, TILE, WAKE_MARGIN, WHOLE
+from sandmod.world import CACHE_LINE, CHUNK, PART, TILE, WAKE_MARGIN, WHOLE, World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -175,3 +175,11 @@ def test_a_falling_stream_stays_together_across_tile_seams(ruleset):
         world.step()
     in_air = world.cells[: height - 40] == sand
     assert in_air.sum() > 20 and (np.nonzero(in_air)[1] == 4).all()
+
+
+def test_the_marks_threads_write_lie_on_cache_lines_of_their_own(ruleset):
+    """Threads updating tiles side by side write these marks often; sharing lines, the cores would fight over them."""
+    world = World(ruleset, 100, 70)
+    for marks in (world._woken, world._stirred):
+        assert marks.shape == world.awake.shape and not marks.any()
+        assert marks.strides[1] == CACHE_LINE and marks.strides[0] == CACHE_LINE * marks.shape[1]
