@@ -239,6 +239,23 @@ class Comparison:
         return asdict(self)
 
 
+@dataclass(frozen=True)
+class Turns:
+    """One thread count, timed in turns with others on the same frames (``sandmod bench --in-turns``)."""
+
+    scene: str
+    width: int
+    height: int
+    steps: int
+    threads: int
+    mcell_updates_per_second: float
+    speedup: float  # over the first thread count asked for
+    over_threads: int  # that count
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
 def _arrays(world: World) -> tuple[np.ndarray, ...]:
     """Everything a step reads or writes: the cells' state and the chunks' marks."""
     return (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations)
@@ -255,9 +272,20 @@ def _restore(world: World, saved: list[np.ndarray], frame: int) -> None:
 
 
 def compare(
-    ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, kernels: Sequence, *, segment: int = 25, repeats: int = 3
+    ruleset: Ruleset,
+    scene: str,
+    size: int,
+    steps: int,
+    threads: int | Sequence[int],
+    kernels: Sequence,
+    *,
+    segment: int = 25,
+    repeats: int = 3,
 ) -> list[float]:
     """Seconds each kernel module takes to step ``scene`` for ``steps`` steps, on the same frames.
+
+    ``threads`` is one count for all, or one per kernel: the same kernel
+    listed twice with two counts times them against each other.
 
     The run is cut into stretches of ``segment`` steps. Each kernel steps each
     stretch ``repeats`` times from the same state, taking turns, and its best
@@ -270,11 +298,12 @@ def compare(
     """
     import numba
 
-    numba.set_num_threads(threads)
+    counts = [threads] * len(kernels) if isinstance(threads, int) else list(threads)
     world = World(ruleset, size, size)
     SCENES[scene](world, ruleset)
-    for kernel in kernels:  # compile, or load from the cache, before timing
+    for kernel, count in zip(kernels, counts):  # compile, or load from the cache, before timing
         start, frame = _saved(world), world.frame
+        numba.set_num_threads(count)
         world.kernel = kernel
         world.step()
         _restore(world, start, frame)
@@ -287,6 +316,7 @@ def compare(
         for repeat in range(repeats):
             for k in range(len(kernels)) if repeat % 2 == 0 else reversed(range(len(kernels))):
                 _restore(world, start, frame)
+                numba.set_num_threads(counts[k])
                 world.kernel = kernels[k]
                 began = time.perf_counter()
                 for _ in range(length):

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -41,6 +42,20 @@ def test_bench_json_prints_one_object_per_run():
         assert r["mcell_updates_per_second"] > 0 and r["peak_memory_mb"] > 0
         assert r["state_bytes_per_cell"] <= 16  # the target
     assert runs[0]["awake_fraction"] == 0.0 and runs[1]["awake_fraction"] > 0.5
+
+
+def test_bench_in_turns_times_thread_counts_on_the_same_frames():
+    threads = min(2, numba.config.NUMBA_NUM_THREADS)
+    args = ["bench", "--scene", "everything", "--size", "256", "--steps", "30", "--threads", "1", "--threads", str(threads), "--in-turns"]
+    result = CliRunner().invoke(cli, [*args, "--json"], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    runs = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [(r["scene"], r["threads"], r["over_threads"]) for r in runs] == [("everything", 1, 1), ("everything", threads, 1)]
+    assert runs[0]["speedup"] == 1.0 and runs[1]["speedup"] > 0 and runs[1]["mcell_updates_per_second"] > 0
+    result = CliRunner().invoke(cli, args, catch_exceptions=False)
+    assert result.exit_code == 0 and result.stdout.strip().endswith("million cell-updates/s, same frames")
+    result = CliRunner().invoke(cli, [*args, "--against", __file__])
+    assert result.exit_code == 2 and "--against and --in-turns do not go together" in result.output
 
 
 def test_bench_rejects_sizes_out_of_range():

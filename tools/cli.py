@@ -513,7 +513,8 @@ def test_(mods, mod_dirs) -> None:
               help="Time rendering instead: an image a step, recorded as FORMAT (repeatable: gif, apng, webp, png-frames).")
 @click.option("--against", type=click.Path(exists=True, dir_okay=False), metavar="KERNEL.py",
               help="Compare with another version of the kernel on the same frames (e.g. from git show REV:core/kernel.py).")
-def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, against) -> None:
+@click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
+def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, in_turns) -> None:
     """Time the kernel on a built-in scene: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -530,7 +531,10 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     With --against, this kernel and the other take turns over stretches of
     25 steps, each stretch three times from the same state, and the best
     times count: a fair comparison on a machine whose speed drifts. Both
-    must step to the same frames (exit 1 where they do not).
+    must step to the same frames (exit 1 where they do not). --in-turns
+    does the same for the --threads counts (say --threads 1 --threads 2):
+    their speeds, each over the first's, and a check that every count steps
+    to the same frames.
     """
     import os
 
@@ -553,8 +557,13 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     if formats:
         _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)
         return
+    if against and in_turns:
+        raise click.UsageError("--against and --in-turns do not go together: give one")
     if against:
         _bench_against(ruleset, against, scenes, size, steps, thread_counts, as_json)
+        return
+    if in_turns:
+        _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json)
         return
     for scene in scenes:
         for threads in thread_counts:
@@ -604,6 +613,28 @@ def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -
                 f"this kernel {result.mcell_updates_per_second:.1f} million cell-updates/s, {path} "
                 f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, same frames",
             )
+
+
+def _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json) -> None:
+    from sandmod import benchmark, kernel
+
+    cells = size * size * steps / 1e6
+    for scene in scenes:
+        try:
+            seconds = benchmark.compare(ruleset, scene, size, steps, thread_counts, [kernel] * len(thread_counts))
+        except benchmark.FramesDiffer as differ:  # a bug in the kernel: threads must never change the frames
+            click.echo(f"error: {scene}: {_threads(thread_counts[0])} and more step to other frames (by frame {differ.frame})", err=True)
+            sys.exit(1)
+        results = [
+            benchmark.Turns(scene, size, size, steps, threads, round(cells / took, 1), round(seconds[0] / took, 3), thread_counts[0])
+            for threads, took in zip(thread_counts, seconds)
+        ]
+        if as_json:
+            for result in results:
+                click.echo(json.dumps(result.as_dict()))
+        else:
+            speeds = [f"{_threads(r.threads)} {r.mcell_updates_per_second:.1f}" + (f" ({r.speedup:.2f}x)" if i else "") for i, r in enumerate(results)]
+            click.echo(f"{scene} {size}x{size}, {steps} steps, in turns: {', '.join(speeds)} million cell-updates/s, same frames")
 
 
 def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json) -> None:
