@@ -172,13 +172,25 @@ def _fluid_move_cell(x, y, g, k):
 
 
 @njit(inline="always", cache=True)
+def _first_row(mark):
+    """The first (chunk-local) row a PART wake mark names."""
+    return mark & 63
+
+
+@njit(inline="always", cache=True)
+def _last_row(mark):
+    """The last (chunk-local) row a PART wake mark names."""
+    return (mark >> 6) & 63
+
+
+@njit(inline="always", cache=True)
 def _widened(mark, y0, y1):
     """A chunk's wake mark (see :data:`sandmod.world.WHOLE`) widened to cover its rows y0..y1 (chunk-local)."""
     if mark == WHOLE:
         return WHOLE
     if mark != 0:
-        y0 = min(y0, mark & 63)
-        y1 = max(y1, (mark >> 6) & 63)
+        y0 = min(y0, _first_row(mark))
+        y1 = max(y1, _last_row(mark))
     if y0 == 0 and y1 == CHUNK - 1:
         return WHOLE  # quicker to read, and to widen
     return PART | y0 | (y1 << 6)
@@ -187,7 +199,7 @@ def _widened(mark, y0, y1):
 @njit(inline="always", cache=True)
 def _covers(mark, row):
     """Does a chunk's wake mark cover its (chunk-local) row?"""
-    return mark == WHOLE or (mark != 0 and (mark & 63) <= row <= ((mark >> 6) & 63))
+    return mark == WHOLE or (mark != 0 and _first_row(mark) <= row <= _last_row(mark))
 
 
 @njit(inline="always", cache=True)
@@ -666,8 +678,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     wy1 = min(by1 + WAKE_MARGIN, height - 1)
                     if wy0 >> CHUNK_SHIFT == wy1 >> CHUNK_SHIFT and wx0 >> CHUNK_SHIFT == wx1 >> CHUNK_SHIFT:
                         # The common case: well inside this chunk.
-                        if woke != WHOLE:
-                            woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))
+                        woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))
                         if stir:
                             stirred[cy, cx] = 1
                     else:
