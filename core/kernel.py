@@ -33,7 +33,8 @@ two side cells open, so nothing passes through a wall or between two corners.
 The per-cell update is written out in one function on purpose: numba counts
 references to every array handed to a helper, and at a few hundred million
 cells a second that bookkeeping costs more than the physics. Helpers here take
-and return plain numbers only.
+and return plain numbers only. The per-cell code reads and writes the world's
+arrays at :func:`_at`, unsigned indices, which numba need not wrap around.
 """
 
 from __future__ import annotations
@@ -112,6 +113,18 @@ SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
 SALT_FIRE = 0x61C88647
 EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
+
+
+@njit(inline="always", cache=True)
+def _at(y, x):
+    """The index of row y, column x of a world-sized (or chunk-sized) array, in bounds (the caller checks).
+
+    Unsigned, so numba leaves out its wrap-around of negative indices: a fifth
+    of the per-cell time. A negative index here would read out of bounds, not
+    from the far edge, so test coordinates before reading (as every cell read
+    does), and run the tests with NUMBA_BOUNDSCHECK=1 after changing the kernel.
+    """
+    return np.uint64(y), np.uint64(x)
 
 
 @njit(inline="always", cache=True)
@@ -208,9 +221,9 @@ def _wake(woken, stirred, stir, x0, y0, x1, y1):
     for wy in range(y0 >> CHUNK_SHIFT, (y1 >> CHUNK_SHIFT) + 1):
         oy = wy << CHUNK_SHIFT
         for wx in range(x0 >> CHUNK_SHIFT, (x1 >> CHUNK_SHIFT) + 1):
-            woken[wy, wx] = _widened(woken[wy, wx], max(y0 - oy, 0), min(y1 - oy, CHUNK - 1))
+            woken[_at(wy, wx)] = _widened(woken[_at(wy, wx)], max(y0 - oy, 0), min(y1 - oy, CHUNK - 1))
             if stir:
-                stirred[wy, wx] = 1
+                stirred[_at(wy, wx)] = 1
 
 
 @njit(cache=True)
@@ -251,16 +264,16 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
         forward = ((frame + y) & 1) == 0
         for j in range(segments):
             cx = first_cx + (j if forward else segments - 1 - j)
-            woke = np.int64(woken[cy, cx])  # this chunk's new mark, kept here while its row is updated
+            woke = np.int64(woken[_at(cy, cx)])  # this chunk's new mark, kept here while its row is updated
             row = y - (cy << CHUNK_SHIFT)
-            if not (_covers(awake[cy, cx], row) or _covers(woke, row)):
+            if not (_covers(awake[_at(cy, cx)], row) or _covers(woke, row)):
                 continue  # asleep: nothing in this row of the chunk or within two cells of it changed
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
             for i in range(sx1 - sx0):
                 x = sx0 + i if forward else sx1 - 1 - i
-                e = cells[y, x]
-                if e == 0 or (flags[y, x] & DONE) != 0:
+                e = cells[_at(y, x)]
+                if e == 0 or (flags[_at(y, x)] & DONE) != 0:
                     continue
                 busy = False  # did anything change, or might it on a later frame?
                 stir = False  # did an element or a heat change (besides even swaps)?
@@ -268,14 +281,14 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                 by0 = by1 = y
                 for _ in range(1):  # one pass; `break` ends the cell's update
                     # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
-                    f = flags[y, x]
+                    f = flags[_at(y, x)]
                     th = thermal[e]
                     # Calm (the common case): not burning, no flame, its heat between its phase changes.
                     calm = (f & BURNING) == 0 and (
-                        th == 0 or ((th & (FLAMMABLE | IGNITES)) == 0 and cold_limit[e] <= heat[y, x] <= hot_limit[e])
+                        th == 0 or ((th & (FLAMMABLE | IGNITES)) == 0 and cold_limit[e] <= heat[_at(y, x)] <= hot_limit[e])
                     )
                     if not calm:
-                        energy = int(heat[y, x])
+                        energy = int(heat[_at(y, x)])
                         into = e
                         if energy > hot_limit[e]:
                             into = heated_into[e]
@@ -283,14 +296,14 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             into = cooled_into[e]
                         elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
                             f |= BURNING
-                            timer[y, x] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
+                            timer[_at(y, x)] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
                         lit = into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0)
                         fh = _cell_key(fire_key ^ 0x5BD1E995, x, y) if lit else 0  # rolls for fire, only where there is fire
                         if into == e and (f & BURNING) != 0:
                             busy = True
                             if (th & EXPLOSIVE) != 0:
                                 # It goes off: frozen for the rest of the frame, then the step's blasts are applied.
-                                flags[y, x] = f | DETONATING | DONE
+                                flags[_at(y, x)] = f | DETONATING | DONE
                                 detonations[tile] += 1
                                 break
                             else:
@@ -298,7 +311,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 for k in range(4):
                                     nx = x + (1, 0, -1, 0)[k]
                                     ny = y + (0, 1, 0, -1)[k]
-                                    if 0 <= nx < width and 0 <= ny < height and extinguishes[cells[ny, nx]] != 0:
+                                    if 0 <= nx < width and 0 <= ny < height and extinguishes[cells[_at(ny, nx)]] != 0:
                                         out = True
                                 if out:  # put out, and cooled to just below catching fire again
                                     f &= ~BURNING
@@ -306,25 +319,25 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 else:
                                     if energy < burn_limit[e]:
                                         energy = min(energy + burn_heat[e], burn_limit[e])
-                                    left = timer[y, x]
+                                    left = timer[_at(y, x)]
                                     if left <= 1:  # burnt out
                                         into = ash[e] if ((fh >> 8) & 0xFFFFFF) < ash_chance[e] else 0
                                     else:
-                                        timer[y, x] = left - 1
+                                        timer[_at(y, x)] = left - 1
                                         d = fh & 3
                                         nx = x + (1, 0, -1, 0)[d]
                                         ny = y + (0, 1, 0, -1)[d]
                                         product = flame[e]
-                                        if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[ny, nx] == 0:
+                                        if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[_at(ny, nx)] == 0:
                                             if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
-                                                cells[ny, nx] = product
+                                                cells[_at(ny, nx)] = product
                                                 stir = True
-                                                shade[ny, nx], timer[ny, nx] = _spawn_state(
+                                                shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(
                                                     _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
                                                 )
-                                                vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
-                                                heat[ny, nx] = _energy(temp_start[product], heat_cap[product])
-                                                flags[ny, nx] = MOVED | LOOSE
+                                                vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
+                                                heat[_at(ny, nx)] = _energy(temp_start[product], heat_cap[product])
+                                                flags[_at(ny, nx)] = MOVED | LOOSE
                         if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
                             # A flame lights the flammable cells it touches, each by its own chance.
                             for k in range(4):
@@ -332,41 +345,41 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 ny = y + (0, 1, 0, -1)[k]
                                 if nx < 0 or ny < 0 or nx >= width or ny >= height:
                                     continue
-                                n = cells[ny, nx]
-                                if (thermal[n] & FLAMMABLE) != 0 and (flags[ny, nx] & BURNING) == 0:
+                                n = cells[_at(ny, nx)]
+                                if (thermal[n] & FLAMMABLE) != 0 and (flags[_at(ny, nx)] & BURNING) == 0:
                                     busy = True  # lit now, or maybe on a later frame
                                     if (_mix32(fh ^ (k + 1) * 0x9E3779B9) >> 8) < catch_chance[n]:
-                                        flags[ny, nx] |= BURNING
-                                        timer[ny, nx] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
+                                        flags[_at(ny, nx)] |= BURNING
+                                        timer[_at(ny, nx)] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
                         if into != e:
                             busy = stir = True
-                            cells[y, x] = into
-                            shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
-                            vx[y, x] = vy[y, x] = carry[y, x] = 0
-                            heat[y, x] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
-                            flags[y, x] = (f & FRESH) | MOVED
+                            cells[_at(y, x)] = into
+                            shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
+                            vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
+                            heat[_at(y, x)] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
+                            flags[_at(y, x)] = (f & FRESH) | MOVED
                             break
-                        if energy != heat[y, x]:
-                            heat[y, x] = energy
+                        if energy != heat[_at(y, x)]:
+                            heat[_at(y, x)] = energy
                             busy = stir = True
-                        if f != flags[y, x]:
-                            flags[y, x] = f
+                        if f != flags[_at(y, x)]:
+                            flags[_at(y, x)] = f
                             busy = True
 
                     # 2. Lifetime: count down, and at zero become another element (not while burning).
                     if life_frames[e] != 0 and (f & BURNING) == 0:
                         busy = True
-                        left = timer[y, x]
+                        left = timer[_at(y, x)]
                         if left <= 1:
                             into = life_into[e]
-                            cells[y, x] = into
+                            cells[_at(y, x)] = into
                             stir = True
-                            shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
-                            vx[y, x] = vy[y, x] = carry[y, x] = 0
-                            heat[y, x] = _energy(_temperature(int(heat[y, x]), heat_recip[e]), heat_cap[into])
-                            flags[y, x] = (flags[y, x] & FRESH) | MOVED
+                            shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
+                            vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
+                            heat[_at(y, x)] = _energy(_temperature(int(heat[_at(y, x)]), heat_recip[e]), heat_cap[into])
+                            flags[_at(y, x)] = (flags[_at(y, x)] & FRESH) | MOVED
                             break
-                        timer[y, x] = left - 1
+                        timer[_at(y, x)] = left - 1
                     h = _cell_key(move_key, x, y)
 
                     # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
@@ -375,13 +388,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if partners != 0:
                         near = 0
                         if x + 1 < width:
-                            near |= 1 << (cells[y, x + 1] & 63)
+                            near |= 1 << (cells[_at(y, x + 1)] & 63)
                         if y + 1 < height:
-                            near |= 1 << (cells[y + 1, x] & 63)
+                            near |= 1 << (cells[_at(y + 1, x)] & 63)
                         if x > 0:
-                            near |= 1 << (cells[y, x - 1] & 63)
+                            near |= 1 << (cells[_at(y, x - 1)] & 63)
                         if y > 0:
-                            near |= 1 << (cells[y - 1, x] & 63)
+                            near |= 1 << (cells[_at(y - 1, x)] & 63)
                         partners &= near
                     if partners != 0:
                         reacted = False
@@ -390,16 +403,16 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             d = (start + k) & 3
                             nx = x + (1, 0, -1, 0)[d]
                             ny = y + (0, 1, 0, -1)[d]
-                            if nx < 0 or ny < 0 or nx >= width or ny >= height or (flags[ny, nx] & REACTED) != 0:
+                            if nx < 0 or ny < 0 or nx >= width or ny >= height or (flags[_at(ny, nx)] & REACTED) != 0:
                                 continue
-                            b = cells[ny, nx]
+                            b = cells[_at(ny, nx)]
                             threshold = react_chance[e, b]
                             if threshold == 0:
                                 continue
                             # One roll per touching pair and frame, the same whichever cell looks.
                             roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
-                            ta = _temperature(int(heat[y, x]), heat_recip[e])
-                            tb = _temperature(int(heat[ny, nx]), heat_recip[b])
+                            ta = _temperature(int(heat[_at(y, x)]), heat_recip[e])
+                            tb = _temperature(int(heat[_at(ny, nx)]), heat_recip[b])
                             if ta + tb < react_tsum_min[e, b] or ta + tb > react_tsum_max[e, b]:
                                 continue
                             busy = True  # it reacts now, or may on a later frame
@@ -409,21 +422,21 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             into_b = react_into_b[e, b]
                             warm = react_heat[e, b]
                             if into_a != e:
-                                cells[y, x] = into_a
+                                cells[_at(y, x)] = into_a
                                 stir = True
-                                shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
-                                vx[y, x] = vy[y, x] = carry[y, x] = 0
-                                heat[y, x] = _energy(ta + warm, heat_cap[into_a])
-                                flags[y, x] &= FRESH
+                                shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
+                                vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
+                                heat[_at(y, x)] = _energy(ta + warm, heat_cap[into_a])
+                                flags[_at(y, x)] &= FRESH
                             if into_b != b:
-                                cells[ny, nx] = into_b
+                                cells[_at(ny, nx)] = into_b
                                 stir = True
-                                shade[ny, nx], timer[ny, nx] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
-                                vx[ny, nx] = vy[ny, nx] = carry[ny, nx] = 0
-                                heat[ny, nx] = _energy(tb + warm, heat_cap[into_b])
-                                flags[ny, nx] &= FRESH
-                            flags[y, x] |= REACTED
-                            flags[ny, nx] |= REACTED
+                                shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
+                                vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
+                                heat[_at(ny, nx)] = _energy(tb + warm, heat_cap[into_b])
+                                flags[_at(ny, nx)] &= FRESH
+                            flags[_at(y, x)] |= REACTED
+                            flags[_at(ny, nx)] |= REACTED
                             reacted = True
                             break
                         if reacted:
@@ -433,8 +446,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     kind = archetype[e]
                     if kind == STATIC:
                         break
-                    old_vx = int(vx[y, x])
-                    old_vy = int(vy[y, x])
+                    old_vx = int(vx[_at(y, x)])
+                    old_vy = int(vy[_at(y, x)])
                     g = fall_dir[e]
                     ty = y + g  # the cell it falls (rises) into
                     fluid = kind == LIQUID or kind == GAS
@@ -445,23 +458,23 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         for k in range(5):
                             nx, ny = _fluid_move_cell(x, y, g, k)
                             if 0 <= nx < width and 0 <= ny < height:
-                                near |= 1 << (cells[ny, nx] & 63)
+                                near |= 1 << (cells[_at(ny, nx)] & 63)
                         if (displaces[e] & near) == 0:
                             break
-                    opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[ty, x]], cells[ty, x], flags[ty, x])
+                    opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
                     if fluid and not opens:
                         for k in range(1, 5):  # the same cells as above, less the one below
                             nx, ny = _fluid_move_cell(x, y, g, k)
                             if 0 <= nx < width and 0 <= ny < height:
-                                if _enterable(displace[e, cells[ny, nx]], cells[ny, nx], flags[ny, nx]):
+                                if _enterable(displace[e, cells[_at(ny, nx)]], cells[_at(ny, nx)], flags[_at(ny, nx)]):
                                     can_flow = True
                                     break
                         if not can_flow and old_vx == 0 and old_vy == 0:
                             break  # at rest, every move shut (by cells done this frame)
                     cvx = old_vx
                     cvy = old_vy
-                    loose = flags[y, x] & LOOSE
+                    loose = flags[_at(y, x)] & LOOSE
                     falling = False
                     coasting = False
                     only_empty = kind == PARTICLE
@@ -493,7 +506,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             d1y = g  # if the drift is blocked: straight on, one cell
                             tries = 2
                             loose = LOOSE
-                        elif g > 0 and cvy > 0 and 0 <= ty < height and vy[ty, x] > 0 and archetype[cells[ty, x]] != STATIC and (flags[ty, x] & DONE) == 0:
+                        elif g > 0 and cvy > 0 and 0 <= ty < height and vy[_at(ty, x)] > 0 and archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
                             busy = True  # the cell below falls too and has not had its turn (another tile's): wait for it
                             break
                         elif kind == POWDER:
@@ -553,13 +566,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             if qx < 0 or qy < 0 or qx >= width or qy >= height:
                                 hit = True
                                 break
-                            o = cells[qy, qx]
-                            if o != 0 and (only_empty or k > 1 or not _enterable(displace[e, o], o, flags[qy, qx])):
+                            o = cells[_at(qy, qx)]
+                            if o != 0 and (only_empty or k > 1 or not _enterable(displace[e, o], o, flags[_at(qy, qx)])):
                                 hit = archetype[o] != PARTICLE  # particles in a swarm wait for each other
                                 break
                             if qx != px and qy != py:  # a diagonal step: one of its side cells must be open
-                                c1 = cells[py, qx]
-                                c2 = cells[qy, px]
+                                c1 = cells[_at(py, qx)]
+                                c2 = cells[_at(qy, px)]
                                 if only_empty:
                                     side_open = c1 == 0 or c2 == 0
                                     hit = archetype[c1] != PARTICLE and archetype[c2] != PARTICLE
@@ -578,7 +591,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             break
 
                     # Settle the new velocity.
-                    entered = cells[py, px]  # what the mover swaps with (0 when it goes into empty)
+                    entered = cells[_at(py, px)]  # what the mover swaps with (0 when it goes into empty)
                     if kind == PARTICLE:
                         if hit or (tries == 0 and cvx == 0 and cvy == 0):
                             loose = LOOSE  # it lands: what it carries takes its place, moving as it flew
@@ -598,11 +611,11 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
                     if used < 0 and not (kind == PARTICLE and loose != 0):
                         if cvx != old_vx or cvy != old_vy:
-                            vx[y, x] = cvx
-                            vy[y, x] = cvy
+                            vx[_at(y, x)] = cvx
+                            vy[_at(y, x)] = cvy
                             busy = True
-                        if kind == POWDER and (flags[y, x] & LOOSE) != loose:
-                            flags[y, x] ^= LOOSE
+                        if kind == POWDER and (flags[_at(y, x)] & LOOSE) != loose:
+                            flags[_at(y, x)] ^= LOOSE
                             busy = True
                         busy = busy or (kind == POWDER and loose != 0)  # a loose grain is still in motion
                         break
@@ -614,40 +627,40 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     by1 = max(y, py)
 
                     # Move: swap everything with the cell at the end of the walk.
-                    marks = flags[y, x] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
+                    marks = flags[_at(y, x)] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
                     if px != x or py != y:
                         # Heat stays even where two cells of one temperature trade places and neither cools.
                         stir = (
                             stir
-                            or heat[y, x] * heat_cap[entered] != heat[py, px] * heat_cap[e]
-                            or _cooling_loss(int(heat[y, x]), heat_cap[e], cooling[e], ambient) != 0
-                            or _cooling_loss(int(heat[py, px]), heat_cap[entered], cooling[entered], ambient) != 0
+                            or heat[_at(y, x)] * heat_cap[entered] != heat[_at(py, px)] * heat_cap[e]
+                            or _cooling_loss(int(heat[_at(y, x)]), heat_cap[e], cooling[e], ambient) != 0
+                            or _cooling_loss(int(heat[_at(py, px)]), heat_cap[entered], cooling[entered], ambient) != 0
                         )
-                        cells[y, x] = entered
-                        cells[py, px] = e
-                        shade[y, x], shade[py, px] = shade[py, px], shade[y, x]
-                        timer[y, x], timer[py, px] = timer[py, px], timer[y, x]
+                        cells[_at(y, x)] = entered
+                        cells[_at(py, px)] = e
+                        shade[_at(y, x)], shade[_at(py, px)] = shade[_at(py, px)], shade[_at(y, x)]
+                        timer[_at(y, x)], timer[_at(py, px)] = timer[_at(py, px)], timer[_at(y, x)]
                         if kind == PARTICLE:  # only particles carry anything, and they only enter empty cells
-                            carry[y, x], carry[py, px] = carry[py, px], carry[y, x]
-                        heat[y, x], heat[py, px] = heat[py, px], heat[y, x]
-                        vx[y, x] = vx[py, px]
-                        vy[y, x] = vy[py, px]
-                        flags[y, x] = MOVED | (flags[py, px] & KEPT)
-                    vx[py, px] = cvx
-                    vy[py, px] = cvy
-                    flags[py, px] = MOVED | loose | marks
+                            carry[_at(y, x)], carry[_at(py, px)] = carry[_at(py, px)], carry[_at(y, x)]
+                        heat[_at(y, x)], heat[_at(py, px)] = heat[_at(py, px)], heat[_at(y, x)]
+                        vx[_at(y, x)] = vx[_at(py, px)]
+                        vy[_at(y, x)] = vy[_at(py, px)]
+                        flags[_at(y, x)] = MOVED | (flags[_at(py, px)] & KEPT)
+                    vx[_at(py, px)] = cvx
+                    vy[_at(py, px)] = cvy
+                    flags[_at(py, px)] = MOVED | loose | marks
 
                     if kind == PARTICLE:
                         if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
-                            into = carry[py, px]
-                            cells[py, px] = into
+                            into = carry[_at(py, px)]
+                            cells[_at(py, px)] = into
                             stir = True
-                            carry[py, px] = 0
-                            heat[py, px] = _energy(_temperature(int(heat[py, px]), heat_recip[e]), heat_cap[into])
+                            carry[_at(py, px)] = 0
+                            heat[_at(py, px)] = _energy(_temperature(int(heat[_at(py, px)]), heat_recip[e]), heat_cap[into])
                             if into == 0:
-                                vx[py, px] = vy[py, px] = 0
+                                vx[_at(py, px)] = vy[_at(py, px)] = 0
                             elif life_frames[e] != 0:  # the particle's own clock ran: start the cargo's
-                                _, timer[py, px] = _spawn_state(_cell_key(spawn_key, px, py), life_frames[into], life_jitter[into])
+                                _, timer[_at(py, px)] = _spawn_state(_cell_key(spawn_key, px, py), life_frames[into], life_jitter[into])
                         break
 
                     # A move knocks resting grains loose: those that could follow into the
@@ -663,13 +676,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             push = (-1, 1)[k - 4]
                         if nx < 0 or ny < 0 or nx >= width or ny >= height:
                             continue
-                        if (flags[ny, nx] & LOOSE) != 0:
+                        if (flags[_at(ny, nx)] & LOOSE) != 0:
                             continue  # already in motion (fluids stay loose)
-                        c = cells[ny, nx]
+                        c = cells[_at(ny, nx)]
                         if knock_chance[c] != 0:  # only powders have a chance
                             if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
-                                flags[ny, nx] |= LOOSE
-                                vx[ny, nx] = push * KNOCK_SPEED
+                                flags[_at(ny, nx)] |= LOOSE
+                                vx[_at(ny, nx)] = push * KNOCK_SPEED
 
                 if busy:  # wake every cell within two cells of the cells it moved between
                     wx0 = max(bx0 - WAKE_MARGIN, 0)
@@ -680,12 +693,12 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         # The common case: well inside this chunk.
                         woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))
                         if stir:
-                            stirred[cy, cx] = 1
+                            stirred[_at(cy, cx)] = 1
                     else:
-                        woken[cy, cx] = woke
+                        woken[_at(cy, cx)] = woke
                         _wake(woken, stirred, stir, wx0, wy0, wx1, wy1)
-                        woke = np.int64(woken[cy, cx])
-            woken[cy, cx] = woke
+                        woke = np.int64(woken[_at(cy, cx)])
+            woken[_at(cy, cx)] = woke
 
 
 @njit(cache=True)
@@ -719,16 +732,16 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     first_cy, end_cy = y0 >> CHUNK_SHIFT, ((y1 - 1) >> CHUNK_SHIFT) + 1
     for cy in range(first_cy, end_cy):
         for cx in range(first_cx, first_cx + segments):
-            if (awake[cy, cx] != 0 or woken[cy, cx] != 0) and (even[cy, cx] != EVEN or stirred[cy, cx] != 0):
-                even[cy, cx] = SWEPT  # swept whole: even, unless a pair at two temperatures or a cooling cell stirs it
+            if (awake[_at(cy, cx)] != 0 or woken[_at(cy, cx)] != 0) and (even[_at(cy, cx)] != EVEN or stirred[_at(cy, cx)] != 0):
+                even[_at(cy, cx)] = SWEPT  # swept whole: even, unless a pair at two temperatures or a cooling cell stirs it
     for r in range(y1 - y0):
         y = y1 - 1 - r if backwards else y0 + r
         cy = y >> CHUNK_SHIFT
         for j in range(segments):
             cx = first_cx + (segments - 1 - j if backwards else j)
-            if awake[cy, cx] == 0 and woken[cy, cx] == 0:
+            if awake[_at(cy, cx)] == 0 and woken[_at(cy, cx)] == 0:
                 continue
-            if even[cy, cx] == EVEN and stirred[cy, cx] == 0:
+            if even[_at(cy, cx)] == EVEN and stirred[_at(cy, cx)] == 0:
                 continue  # one temperature throughout, as its last sweep found
             uneven = False
             sx0 = max(x0, cx << CHUNK_SHIFT)
@@ -736,13 +749,13 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             changed_x0, changed_x1 = sx1, sx0 - 1  # the first and last cell of the segment whose heat changed
             for i in range(sx1 - sx0):
                 x = sx1 - 1 - i if backwards else sx0 + i
-                e = cells[y, x]
-                energy = int(heat[y, x])
+                e = cells[_at(y, x)]
+                energy = int(heat[_at(y, x)])
                 changed = False
                 loss = _cooling_loss(energy, heat_cap[e], cooling[e], ambient)
                 if loss != 0:
                     energy += loss
-                    heat[y, x] = energy
+                    heat[_at(y, x)] = energy
                     changed = True
                 g_own = conductance[e]
                 for k in range(2):
@@ -750,8 +763,8 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
                     ny = y + k
                     if nx >= width or ny >= height:
                         continue
-                    n = cells[ny, nx]
-                    other = int(heat[ny, nx])
+                    n = cells[_at(ny, nx)]
+                    other = int(heat[_at(ny, nx)])
                     if other * heat_cap[e] == energy * heat_cap[n]:
                         continue  # the common case: the same temperature (E_a / C_a == E_b / C_b)
                     uneven = True
@@ -762,8 +775,8 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
                     flow = _scaled(gap * g, 1)
                     if flow != 0:
                         energy -= flow
-                        heat[y, x] = energy
-                        heat[ny, nx] = other + flow
+                        heat[_at(y, x)] = energy
+                        heat[_at(ny, nx)] = other + flow
                         changed = True
                 if changed:
                     changed_x0 = min(changed_x0, x)
@@ -771,11 +784,11 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             if changed_x0 <= changed_x1:  # wake (and stir) the cells next to them and to their partners
                 _wake(woken, stirred, True, max(changed_x0 - 1, 0), max(y - 1, 0), min(changed_x1 + 2, width - 1), min(y + 2, height - 1))
             if uneven:
-                stirred[cy, cx] = 1
+                stirred[_at(cy, cx)] = 1
     for cy in range(first_cy, end_cy):
         for cx in range(first_cx, first_cx + segments):
-            if even[cy, cx] == SWEPT:
-                even[cy, cx] = EVEN
+            if even[_at(cy, cx)] == SWEPT:
+                even[_at(cy, cx)] = EVEN
 
 
 @njit(cache=True, parallel=True)
