@@ -122,7 +122,7 @@ def _at(y, x):
     Unsigned, so numba leaves out its wrap-around of negative indices: a fifth
     of the per-cell time. A negative index here would read out of bounds, not
     from the far edge, so test coordinates before reading (as every cell read
-    does), and run the tests with NUMBA_BOUNDSCHECK=1 after changing the kernel.
+    does); ``tests/test_bounds.py`` runs busy worlds with bounds checks on.
     """
     return np.uint64(y), np.uint64(x)
 
