@@ -128,6 +128,18 @@ def _at(y, x):
 
 
 @njit(inline="always", cache=True)
+def _within(v, limit):
+    """0 <= v < limit, in one unsigned comparison (a negative v wraps to a huge one)."""
+    return np.uint64(v) < np.uint64(limit)
+
+
+@njit(inline="always", cache=True)
+def _inside(x, y, width, height):
+    """Is cell (x, y) in the world? Two comparisons instead of four."""
+    return _within(x, width) and _within(y, height)
+
+
+@njit(inline="always", cache=True)
 def _cell_key(key, x, y):
     """The hash of cell (x, y) under a frame key."""
     return _mix32(key ^ ((y << 16) | x))
@@ -311,7 +323,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 for k in range(4):
                                     nx = x + (1, 0, -1, 0)[k]
                                     ny = y + (0, 1, 0, -1)[k]
-                                    if 0 <= nx < width and 0 <= ny < height and extinguishes[cells[_at(ny, nx)]] != 0:
+                                    if _inside(nx, ny, width, height) and extinguishes[cells[_at(ny, nx)]] != 0:
                                         out = True
                                 if out:  # put out, and cooled to just below catching fire again
                                     f &= ~BURNING
@@ -328,7 +340,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                         nx = x + (1, 0, -1, 0)[d]
                                         ny = y + (0, 1, 0, -1)[d]
                                         product = flame[e]
-                                        if product != 0 and 0 <= nx < width and 0 <= ny < height and cells[_at(ny, nx)] == 0:
+                                        if product != 0 and _inside(nx, ny, width, height) and cells[_at(ny, nx)] == 0:
                                             if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
                                                 cells[_at(ny, nx)] = product
                                                 stir = True
@@ -343,7 +355,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             for k in range(4):
                                 nx = x + (1, 0, -1, 0)[k]
                                 ny = y + (0, 1, 0, -1)[k]
-                                if nx < 0 or ny < 0 or nx >= width or ny >= height:
+                                if not _inside(nx, ny, width, height):
                                     continue
                                 n = cells[_at(ny, nx)]
                                 if (thermal[n] & FLAMMABLE) != 0 and (flags[_at(ny, nx)] & BURNING) == 0:
@@ -403,7 +415,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             d = (start + k) & 3
                             nx = x + (1, 0, -1, 0)[d]
                             ny = y + (0, 1, 0, -1)[d]
-                            if nx < 0 or ny < 0 or nx >= width or ny >= height or (flags[_at(ny, nx)] & REACTED) != 0:
+                            if not _inside(nx, ny, width, height) or (flags[_at(ny, nx)] & REACTED) != 0:
                                 continue
                             b = cells[_at(ny, nx)]
                             threshold = react_chance[e, b]
@@ -457,16 +469,16 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         near = 0
                         for k in range(5):
                             nx, ny = _fluid_move_cell(x, y, g, k)
-                            if 0 <= nx < width and 0 <= ny < height:
+                            if _inside(nx, ny, width, height):
                                 near |= 1 << (cells[_at(ny, nx)] & 63)
                         if (displaces[e] & near) == 0:
                             break
-                    opens = kind != PARTICLE and 0 <= ty < height and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
+                    opens = kind != PARTICLE and _within(ty, height) and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
                     if fluid and not opens:
                         for k in range(1, 5):  # the same cells as above, less the one below
                             nx, ny = _fluid_move_cell(x, y, g, k)
-                            if 0 <= nx < width and 0 <= ny < height:
+                            if _inside(nx, ny, width, height):
                                 if _enterable(displace[e, cells[_at(ny, nx)]], cells[_at(ny, nx)], flags[_at(ny, nx)]):
                                     can_flow = True
                                     break
@@ -506,7 +518,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             d1y = g  # if the drift is blocked: straight on, one cell
                             tries = 2
                             loose = LOOSE
-                        elif g > 0 and cvy > 0 and 0 <= ty < height and vy[_at(ty, x)] > 0 and archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
+                        elif g > 0 and cvy > 0 and _within(ty, height) and vy[_at(ty, x)] > 0 and archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
                             busy = True  # the cell below falls too and has not had its turn (another tile's): wait for it
                             break
                         elif kind == POWDER:
@@ -563,7 +575,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         hit = False
                         for k in range(1, steps + 1):
                             qx, qy = _line_point(x, y, dx, dy, steps, k)
-                            if qx < 0 or qy < 0 or qx >= width or qy >= height:
+                            if not _inside(qx, qy, width, height):
                                 hit = True
                                 break
                             o = cells[_at(qy, qx)]
@@ -674,7 +686,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             nx = px + (-1, 1)[k - 4]
                             ny = py
                             push = (-1, 1)[k - 4]
-                        if nx < 0 or ny < 0 or nx >= width or ny >= height:
+                        if not _inside(nx, ny, width, height):
                             continue
                         if (flags[_at(ny, nx)] & LOOSE) != 0:
                             continue  # already in motion (fluids stay loose)
@@ -943,7 +955,7 @@ def explode(s, t, blasts, count, key, particle, awake, even):
                 even[wy, wx] = 0
         # 0: untouched; 1: destroyed; 2 + d: fringe cell d cells past the destruction (the nearest ray's d).
         mark = np.zeros((2 * reach + 1, 2 * reach + 1), np.int16)
-        if 0 <= cx < width and 0 <= cy < height:
+        if _inside(cx, cy, width, height):
             mark[reach, reach] = 1
         for r in range(8 * radius):
             side = r // (2 * radius)
@@ -963,7 +975,7 @@ def explode(s, t, blasts, count, key, particle, awake, even):
             past = 0
             for k in range(1, reach + 1):
                 qx, qy = _line_point(cx, cy, bx, by, radius, k)
-                if qx < 0 or qy < 0 or qx >= width or qy >= height:
+                if not _inside(qx, qy, width, height):
                     break
                 ox = qx - cx
                 oy = qy - cy
