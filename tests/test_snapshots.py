@@ -62,7 +62,6 @@ def test_elements_are_mapped_by_name_across_other_mods(tmp_path):
         load_snapshot(no_water, tmp_path / "s.npz")
 
 
-
 def test_a_snapshot_with_a_wider_carry_array_still_loads(tmp_path):
     """Snapshots written before ``carry`` became uint8 held it as uint16; their flying cargo lands the same."""
     ruleset = load_ruleset(["sand"])
@@ -82,6 +81,7 @@ def test_a_snapshot_with_a_wider_carry_array_still_loads(tmp_path):
         world.step()
         old.step()
     same_state(old, world)
+
 
 def test_cli_continues_from_a_snapshot_to_the_same_last_frame(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
