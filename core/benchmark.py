@@ -333,6 +333,67 @@ def compare(
     return best
 
 
+@dataclass(frozen=True)
+class Yardstick:
+    """This kernel timed in turns with :mod:`sandmod.yardstick` (``sandmod bench --yardstick``)."""
+
+    scene: str
+    width: int
+    height: int
+    steps: int
+    threads: int  # this kernel's; the yardstick runs on one
+    mcell_updates_per_second: float
+    yardstick_mcell_updates_per_second: float
+    over_yardstick: float  # this kernel's speed over the yardstick's
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def against_yardstick(
+    ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, *, segment: int = 25, repeats: int = 3
+) -> tuple[float, float]:
+    """Seconds this kernel (on ``threads``) and the yardstick (on one) take to step ``scene`` ``steps`` steps.
+
+    Both start from the scene's cells and step by their own rules; they take
+    turns over stretches of ``segment`` steps, each stretch ``repeats`` times
+    from the same state, and the best times count, as in :func:`compare`.
+    """
+    import numba
+
+    from . import yardstick
+    from .hashing import SALT_MOVE, frame_key
+
+    world = World(ruleset, size, size)
+    SCENES[scene](world, ruleset)
+    cells = world.cells.copy()
+    moved = np.zeros(cells.shape, np.uint8)
+    sand, water = ruleset.index("sand"), ruleset.index("water")
+    keys = [frame_key(world.seed, frame, SALT_MOVE) for frame in range(steps)]
+    yardstick.step(cells.copy(), moved, sand, water, 0, keys[0])  # compile, or load from the cache
+    numba.set_num_threads(threads)
+    ours = theirs = 0.0
+    for first in range(0, steps, segment):
+        frames = range(first, min(first + segment, steps))
+        start, frame, start_cells = _saved(world), world.frame, cells.copy()
+        best = [float("inf")] * 2
+        for repeat in range(repeats):
+            for k in (0, 1) if repeat % 2 == 0 else (1, 0):
+                if k == 0:
+                    _restore(world, start, frame)
+                    began = time.perf_counter()
+                    for _ in frames:
+                        world.step()
+                else:
+                    cells[...] = start_cells
+                    began = time.perf_counter()
+                    for f in frames:
+                        yardstick.step(cells, moved, sand, water, f, keys[f])
+                best[k] = min(best[k], time.perf_counter() - began)
+        ours, theirs = ours + best[0], theirs + best[1]
+    return ours, theirs
+
+
 def max_threads() -> int:
     """How many threads the kernel may use in this process (``NUMBA_NUM_THREADS``, else the CPUs)."""
     return int(os.environ.get("NUMBA_NUM_THREADS") or os.cpu_count() or 1)

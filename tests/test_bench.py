@@ -55,7 +55,7 @@ def test_bench_in_turns_times_thread_counts_on_the_same_frames():
     result = CliRunner().invoke(cli, args, catch_exceptions=False)
     assert result.exit_code == 0 and result.stdout.strip().endswith("million cell-updates/s, same frames")
     result = CliRunner().invoke(cli, [*args, "--against", __file__])
-    assert result.exit_code == 2 and "--against and --in-turns do not go together" in result.output
+    assert result.exit_code == 2 and "--against, --in-turns and --yardstick do not go together: give one" in result.output
 
 
 def test_bench_rejects_sizes_out_of_range():

@@ -514,7 +514,8 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--against", type=click.Path(exists=True, dir_okay=False), metavar="KERNEL.py",
               help="Compare with another version of the kernel on the same frames (e.g. from git show REV:core/kernel.py).")
 @click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
-def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, in_turns) -> None:
+@click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
+def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, in_turns, yardstick) -> None:
     """Time the kernel on a built-in scene: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -535,6 +536,12 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     does the same for the --threads counts (say --threads 1 --threads 2):
     their speeds, each over the first's, and a check that every count steps
     to the same frames.
+
+    With --yardstick, the kernel takes turns in the same way with the
+    yardstick: a dozen-line numba step in which sand falls and sinks
+    through water and water flows, on one thread, with nothing else (no
+    velocity, heat, reactions or sleeping chunks). It shows what this
+    machine allows today, and the kernel's speed as a share of it.
     """
     import os
 
@@ -557,13 +564,16 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     if formats:
         _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)
         return
-    if against and in_turns:
-        raise click.UsageError("--against and --in-turns do not go together: give one")
+    if sum(map(bool, (against, in_turns, yardstick))) > 1:
+        raise click.UsageError("--against, --in-turns and --yardstick do not go together: give one")
     if against:
         _bench_against(ruleset, against, scenes, size, steps, thread_counts, as_json)
         return
     if in_turns:
         _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json)
+        return
+    if yardstick:
+        _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json)
         return
     for scene in scenes:
         for threads in thread_counts:
@@ -635,6 +645,23 @@ def _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json) -> Non
         else:
             speeds = [f"{_threads(r.threads)} {r.mcell_updates_per_second:.1f}" + (f" ({r.speedup:.2f}x)" if i else "") for i, r in enumerate(results)]
             click.echo(f"{scene} {size}x{size}, {steps} steps, in turns: {', '.join(speeds)} million cell-updates/s, same frames")
+
+
+def _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json) -> None:
+    from sandmod import benchmark
+
+    cells = size * size * steps / 1e6
+    for scene in scenes:
+        for threads in thread_counts:
+            ours, theirs = benchmark.against_yardstick(ruleset, scene, size, steps, threads)
+            result = benchmark.Yardstick(scene, size, size, steps, threads, round(cells / ours, 1), round(cells / theirs, 1), round(theirs / ours, 3))
+            _report(
+                result,
+                as_json,
+                f"{scene} {size}x{size}, {steps} steps, in turns: this kernel on {_threads(threads)} "
+                f"{result.mcell_updates_per_second:.1f} million cell-updates/s, the yardstick on 1 thread "
+                f"{result.yardstick_mcell_updates_per_second:.1f}: {result.over_yardstick:.2f}x",
+            )
 
 
 def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json) -> None:

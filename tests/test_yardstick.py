@@ -1,0 +1,72 @@
+"""The yardstick (``sandmod bench --yardstick``) against a slow, obvious reference."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from click.testing import CliRunner
+
+from sandmod import benchmark, yardstick
+from sandmod.hashing import SALT_MOVE, cell_hash, frame_key
+from sandmod.tools.cli import cli
+
+SAND, WATER, STONE = 1, 2, 3
+
+
+def reference_step(cells: np.ndarray, frame: int, key: int) -> None:
+    """The yardstick's rules, one cell at a time in plain Python."""
+    height, width = cells.shape
+    moved = np.zeros(cells.shape, bool)
+    for y in reversed(range(height)):
+        xs = range(width) if (frame + y) % 2 == 0 else reversed(range(width))
+        for x in xs:
+            e = int(cells[y, x])
+            if e not in (SAND, WATER) or moved[y, x]:
+                continue
+            side = 1 if cell_hash(key, x, y) & 1 else -1
+            tries = [(0, 1), (side, 1), (-side, 1)] + ([(side, 0), (-side, 0)] if e == WATER else [])
+            for dx, dy in tries:
+                nx, ny = x + dx, y + dy
+                if not (0 <= nx < width and ny < height):
+                    continue
+                o = int(cells[ny, nx])
+                if o == 0 or (e == SAND and o == WATER and not moved[ny, nx]):
+                    cells[y, x], cells[ny, nx] = o, e
+                    moved[ny, nx] = True
+                    moved[y, x] = o != 0
+                    break
+
+
+def test_the_yardstick_steps_as_the_reference_does():
+    rng = np.random.default_rng(5)
+    cells = rng.choice(np.array([0, SAND, WATER, STONE], np.uint16), size=(37, 53), p=[0.4, 0.25, 0.25, 0.1])
+    expected = cells.copy()
+    moved = np.zeros(cells.shape, np.uint8)
+    for frame in range(40):
+        key = frame_key(7, frame, SALT_MOVE)
+        yardstick.step(cells, moved, SAND, WATER, frame, key)
+        reference_step(expected, frame, key)
+        assert np.array_equal(cells, expected), f"frame {frame}"
+    assert [(cells == e).sum() for e in (SAND, WATER, STONE)] == [(expected == e).sum() for e in (SAND, WATER, STONE)]
+    assert (cells[-1] == SAND).sum() > (cells[0] == SAND).sum()  # it did fall
+
+
+def test_against_yardstick_times_both(ruleset):
+    ours, theirs = benchmark.against_yardstick(ruleset, "halves", 64, 30, 1, segment=8, repeats=2)
+    assert ours > 0 and theirs > 0
+
+
+def test_bench_yardstick_prints_both_speeds():
+    args = ["bench", "--scene", "mix", "--size", "256", "--steps", "4", "--threads", "1", "--yardstick"]
+    result = CliRunner().invoke(cli, [*args, "--json"], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    run = json.loads(result.stdout)
+    assert (run["scene"], run["width"], run["steps"], run["threads"]) == ("mix", 256, 4, 1)
+    assert run["mcell_updates_per_second"] > 0 and run["yardstick_mcell_updates_per_second"] > 0
+    ratio = run["mcell_updates_per_second"] / run["yardstick_mcell_updates_per_second"]
+    assert abs(run["over_yardstick"] / ratio - 1) < 0.02  # the speeds are rounded, the share is not
+    result = CliRunner().invoke(cli, args, catch_exceptions=False)
+    assert result.exit_code == 0 and "the yardstick on 1 thread" in result.stdout
+    result = CliRunner().invoke(cli, [*args, "--in-turns"])
+    assert result.exit_code == 2 and "do not go together" in result.output
