@@ -341,7 +341,7 @@ class Yardstick:
     width: int
     height: int
     steps: int
-    threads: int  # this kernel's; the yardstick runs on one
+    threads: int  # for both: the yardstick cuts the world into as many bands of columns
     mcell_updates_per_second: float
     yardstick_mcell_updates_per_second: float
     over_yardstick: float  # this kernel's speed over the yardstick's
@@ -353,7 +353,7 @@ class Yardstick:
 def against_yardstick(
     ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, *, segment: int = 25, repeats: int = 3
 ) -> tuple[float, float]:
-    """Seconds this kernel (on ``threads``) and the yardstick (on one) take to step ``scene`` ``steps`` steps.
+    """Seconds this kernel and the yardstick take to step ``scene`` ``steps`` steps on ``threads`` threads.
 
     Both start from the scene's cells and step by their own rules; they take
     turns over stretches of ``segment`` steps, each stretch ``repeats`` times
@@ -370,8 +370,8 @@ def against_yardstick(
     moved = np.zeros(cells.shape, np.uint8)
     sand, water = ruleset.index("sand"), ruleset.index("water")
     keys = [frame_key(world.seed, frame, SALT_MOVE) for frame in range(steps)]
-    yardstick.step(cells.copy(), moved, sand, water, 0, keys[0])  # compile, or load from the cache
     numba.set_num_threads(threads)
+    yardstick.step(cells.copy(), moved, sand, water, 0, keys[0], threads)  # compile, or load from the cache
     ours = theirs = 0.0
     for first in range(0, steps, segment):
         frames = range(first, min(first + segment, steps))
@@ -388,7 +388,7 @@ def against_yardstick(
                     cells[...] = start_cells
                     began = time.perf_counter()
                     for f in frames:
-                        yardstick.step(cells, moved, sand, water, f, keys[f])
+                        yardstick.step(cells, moved, sand, water, f, keys[f], threads)
                 best[k] = min(best[k], time.perf_counter() - began)
         ours, theirs = ours + best[0], theirs + best[1]
     return ours, theirs

@@ -539,9 +539,10 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
 
     With --yardstick, the kernel takes turns in the same way with the
     yardstick: a dozen-line numba step in which sand falls and sinks
-    through water and water flows, on one thread, with nothing else (no
-    velocity, heat, reactions or sleeping chunks). It shows what this
-    machine allows today, and the kernel's speed as a share of it.
+    through water and water flows, and nothing else (no velocity, heat,
+    reactions or sleeping chunks; on several threads, each steps its own
+    band of columns). It shows what this machine allows at the time, and
+    the kernel's speed as a share of it.
     """
     import os
 
@@ -658,8 +659,8 @@ def _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json) -> No
             _report(
                 result,
                 as_json,
-                f"{scene} {size}x{size}, {steps} steps, in turns: this kernel on {_threads(threads)} "
-                f"{result.mcell_updates_per_second:.1f} million cell-updates/s, the yardstick on 1 thread "
+                f"{scene} {size}x{size}, {steps} steps, {_threads(threads)}, in turns: this kernel "
+                f"{result.mcell_updates_per_second:.1f} million cell-updates/s, the yardstick "
                 f"{result.yardstick_mcell_updates_per_second:.1f}: {result.over_yardstick:.2f}x",
             )
 
