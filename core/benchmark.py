@@ -335,7 +335,7 @@ def compare(
 
 @dataclass(frozen=True)
 class Yardstick:
-    """This kernel timed in turns with :mod:`sandmod.yardstick` (``sandmod bench --yardstick``)."""
+    """One thread count: this kernel and :mod:`sandmod.yardstick` in turns (``sandmod bench --yardstick``)."""
 
     scene: str
     width: int
@@ -345,19 +345,24 @@ class Yardstick:
     mcell_updates_per_second: float
     yardstick_mcell_updates_per_second: float
     over_yardstick: float  # this kernel's speed over the yardstick's
+    speedup: float  # this kernel's, over the first thread count asked for
+    yardstick_speedup: float  # the yardstick's, over the same
+    over_threads: int  # that count
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
 def against_yardstick(
-    ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, *, segment: int = 25, repeats: int = 3
-) -> tuple[float, float]:
-    """Seconds this kernel and the yardstick take to step ``scene`` ``steps`` steps on ``threads`` threads.
+    ruleset: Ruleset, scene: str, size: int, steps: int, threads: Sequence[int], *, segment: int = 25, repeats: int = 3
+) -> tuple[list[float], list[float]]:
+    """Seconds this kernel and the yardstick take to step ``scene`` ``steps`` steps, on each count of ``threads``.
 
-    Both start from the scene's cells and step by their own rules; they take
-    turns over stretches of ``segment`` steps, each stretch ``repeats`` times
-    from the same state, and the best times count, as in :func:`compare`.
+    Both start from the scene's cells and step by their own rules; all of
+    them take turns over stretches of ``segment`` steps, each stretch
+    ``repeats`` times from the same state, and the best times count, as in
+    :func:`compare`. Returns this kernel's seconds and the yardstick's, one
+    per thread count.
     """
     import numba
 
@@ -366,32 +371,36 @@ def against_yardstick(
 
     world = World(ruleset, size, size)
     SCENES[scene](world, ruleset)
-    cells = world.cells.copy()
-    moved = np.zeros(cells.shape, np.uint8)
+    cells = [world.cells.copy() for _ in threads]  # the yardstick's bands differ by count, and so do its frames
+    moved = np.zeros(world.cells.shape, np.uint8)
     sand, water = ruleset.index("sand"), ruleset.index("water")
     keys = [frame_key(world.seed, frame, SALT_MOVE) for frame in range(steps)]
-    numba.set_num_threads(threads)
-    yardstick.step(cells.copy(), moved, sand, water, 0, keys[0], threads)  # compile, or load from the cache
-    ours = theirs = 0.0
+    for count in threads:  # compile, or load from the cache
+        numba.set_num_threads(count)
+        yardstick.step(world.cells.copy(), moved, sand, water, 0, keys[0], count)
+    runs = [(k, ours) for k in range(len(threads)) for ours in (True, False)]
+    best = [[0.0] * len(threads), [0.0] * len(threads)]  # this kernel's, the yardstick's
     for first in range(0, steps, segment):
         frames = range(first, min(first + segment, steps))
-        start, frame, start_cells = _saved(world), world.frame, cells.copy()
-        best = [float("inf")] * 2
+        start, frame, starts = _saved(world), world.frame, [c.copy() for c in cells]
+        times = [[float("inf")] * len(threads), [float("inf")] * len(threads)]
         for repeat in range(repeats):
-            for k in (0, 1) if repeat % 2 == 0 else (1, 0):
-                if k == 0:
+            for k, ours in runs if repeat % 2 == 0 else reversed(runs):
+                numba.set_num_threads(threads[k])
+                if ours:  # every count steps the world to the same frames: each run ends where the others do
                     _restore(world, start, frame)
                     began = time.perf_counter()
                     for _ in frames:
                         world.step()
                 else:
-                    cells[...] = start_cells
+                    cells[k][...] = starts[k]
                     began = time.perf_counter()
                     for f in frames:
-                        yardstick.step(cells, moved, sand, water, f, keys[f], threads)
-                best[k] = min(best[k], time.perf_counter() - began)
-        ours, theirs = ours + best[0], theirs + best[1]
-    return ours, theirs
+                        yardstick.step(cells[k], moved, sand, water, f, keys[f], threads[k])
+                taken = time.perf_counter() - began
+                times[not ours][k] = min(times[not ours][k], taken)
+        best = [[b + t for b, t in zip(bs, ts)] for bs, ts in zip(best, times)]
+    return best[0], best[1]
 
 
 def max_threads() -> int:

@@ -56,22 +56,27 @@ def test_the_yardstick_steps_as_the_reference_does(bands):
     assert (cells[-1] == SAND).sum() > (cells[0] == SAND).sum()  # it did fall
 
 
-def test_against_yardstick_times_both(ruleset):
-    threads = min(2, numba.config.NUMBA_NUM_THREADS)
+def test_against_yardstick_times_both_on_each_thread_count(ruleset):
+    threads = [1, min(2, numba.config.NUMBA_NUM_THREADS)]
     ours, theirs = benchmark.against_yardstick(ruleset, "halves", 64, 30, threads, segment=8, repeats=2)
-    assert ours > 0 and theirs > 0
+    assert len(ours) == len(theirs) == 2 and min(ours + theirs) > 0
 
 
 def test_bench_yardstick_prints_both_speeds():
-    args = ["bench", "--scene", "mix", "--size", "256", "--steps", "4", "--threads", "1", "--yardstick"]
+    threads = str(min(2, numba.config.NUMBA_NUM_THREADS))
+    args = ["bench", "--scene", "mix", "--size", "256", "--steps", "4", "--threads", "1", "--threads", threads, "--yardstick"]
     result = CliRunner().invoke(cli, [*args, "--json"], catch_exceptions=False)
     assert result.exit_code == 0, result.output
-    run = json.loads(result.stdout)
-    assert (run["scene"], run["width"], run["steps"], run["threads"]) == ("mix", 256, 4, 1)
-    assert run["mcell_updates_per_second"] > 0 and run["yardstick_mcell_updates_per_second"] > 0
-    ratio = run["mcell_updates_per_second"] / run["yardstick_mcell_updates_per_second"]
-    assert abs(run["over_yardstick"] / ratio - 1) < 0.02  # the speeds are rounded, the share is not
+    runs = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [(r["scene"], r["width"], r["steps"], r["threads"], r["over_threads"]) for r in runs] == [
+        ("mix", 256, 4, 1, 1), ("mix", 256, 4, int(threads), 1)
+    ]
+    for run in runs:
+        assert run["mcell_updates_per_second"] > 0 and run["yardstick_mcell_updates_per_second"] > 0
+        ratio = run["mcell_updates_per_second"] / run["yardstick_mcell_updates_per_second"]
+        assert abs(run["over_yardstick"] / ratio - 1) < 0.02  # the speeds are rounded, the share is not
+    assert runs[0]["speedup"] == runs[0]["yardstick_speedup"] == 1.0 and runs[1]["speedup"] > 0 and runs[1]["yardstick_speedup"] > 0
     result = CliRunner().invoke(cli, args, catch_exceptions=False)
-    assert result.exit_code == 0 and "1 thread, in turns: this kernel" in result.stdout and "the yardstick" in result.stdout
+    assert result.exit_code == 0 and "1 thread: this kernel" in result.stdout and f"{threads} over 1: this kernel" in result.stdout
     result = CliRunner().invoke(cli, [*args, "--in-turns"])
     assert result.exit_code == 2 and "do not go together" in result.output

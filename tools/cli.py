@@ -538,11 +538,12 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     to the same frames.
 
     With --yardstick, the kernel takes turns in the same way with the
-    yardstick: a dozen-line numba step in which sand falls and sinks
-    through water and water flows, and nothing else (no velocity, heat,
-    reactions or sleeping chunks; on several threads, each steps its own
-    band of columns). It shows what this machine allows at the time, and
-    the kernel's speed as a share of it.
+    yardstick, on each --threads count: a dozen-line numba step in which
+    sand falls and sinks through water and water flows, and nothing else
+    (no velocity, heat, reactions or sleeping chunks; on several threads,
+    each steps its own band of columns). It shows what this machine allows
+    at the time, the kernel's speed as a share of it, and what more
+    threads give each of them.
     """
     import os
 
@@ -653,16 +654,25 @@ def _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json) -> No
 
     cells = size * size * steps / 1e6
     for scene in scenes:
-        for threads in thread_counts:
-            ours, theirs = benchmark.against_yardstick(ruleset, scene, size, steps, threads)
-            result = benchmark.Yardstick(scene, size, size, steps, threads, round(cells / ours, 1), round(cells / theirs, 1), round(theirs / ours, 3))
-            _report(
-                result,
-                as_json,
-                f"{scene} {size}x{size}, {steps} steps, {_threads(threads)}, in turns: this kernel "
-                f"{result.mcell_updates_per_second:.1f} million cell-updates/s, the yardstick "
-                f"{result.yardstick_mcell_updates_per_second:.1f}: {result.over_yardstick:.2f}x",
+        ours, theirs = benchmark.against_yardstick(ruleset, scene, size, steps, thread_counts)
+        results = [
+            benchmark.Yardstick(
+                scene, size, size, steps, threads, round(cells / mine, 1), round(cells / its, 1), round(its / mine, 3),
+                round(ours[0] / mine, 3), round(theirs[0] / its, 3), thread_counts[0],
             )
+            for threads, mine, its in zip(thread_counts, ours, theirs)
+        ]
+        if as_json:
+            for result in results:
+                click.echo(json.dumps(result.as_dict()))
+            continue
+        parts = [
+            f"{_threads(r.threads)}: this kernel {r.mcell_updates_per_second:.1f}, the yardstick "
+            f"{r.yardstick_mcell_updates_per_second:.1f} ({r.over_yardstick:.2f} of it)"
+            for r in results
+        ]
+        parts += [f"{r.threads} over {r.over_threads}: this kernel {r.speedup:.2f}x, the yardstick {r.yardstick_speedup:.2f}x" for r in results[1:]]
+        click.echo(f"{scene} {size}x{size}, {steps} steps, in turns, million cell-updates/s: {'; '.join(parts)}")
 
 
 def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json) -> None:
