@@ -11,9 +11,9 @@ into one of the two cells below it (the first picked by a hash), if that cell
 is empty, or water that has not moved this frame (they trade places). Water
 falls likewise into empty cells, else flows one cell to a side. Anything else
 stands still. A cell moved into is not updated again that frame. There is no
-velocity, heat, reaction, sleeping chunk or thread: what is left is the
-per-cell cost that every falling-sand engine pays. On several threads each
-takes a band of the world's columns, and the bands do not touch.
+velocity, heat, reaction or sleeping chunk: what is left is the per-cell
+cost that every falling-sand engine pays. On several threads each takes a
+band of the world's columns, and the bands do not touch.
 """
 
 from __future__ import annotations
