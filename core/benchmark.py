@@ -334,23 +334,15 @@ def compare(
 
 
 @dataclass(frozen=True)
-class Yardstick:
-    """One thread count: this kernel and :mod:`sandmod.yardstick` in turns (``sandmod bench --yardstick``)."""
+class Yardstick(Turns):
+    """One thread count: this kernel and :mod:`sandmod.yardstick` in turns (``sandmod bench --yardstick``).
 
-    scene: str
-    width: int
-    height: int
-    steps: int
-    threads: int  # for both: the yardstick cuts the world into as many bands of columns
-    mcell_updates_per_second: float
+    ``threads`` is the count for both: the yardstick cuts the world into as many bands of columns.
+    """
+
     yardstick_mcell_updates_per_second: float
     over_yardstick: float  # this kernel's speed over the yardstick's
-    speedup: float  # this kernel's, over the first thread count asked for
-    yardstick_speedup: float  # the yardstick's, over the same
-    over_threads: int  # that count
-
-    def as_dict(self) -> dict:
-        return asdict(self)
+    yardstick_speedup: float  # the yardstick's, over the first thread count asked for
 
 
 def against_yardstick(
@@ -378,16 +370,17 @@ def against_yardstick(
     for count in threads:  # compile, or load from the cache
         numba.set_num_threads(count)
         yardstick.step(world.cells.copy(), moved, sand, water, 0, keys[0], count)
-    runs = [(k, ours) for k in range(len(threads)) for ours in (True, False)]
-    best = [[0.0] * len(threads), [0.0] * len(threads)]  # this kernel's, the yardstick's
+    KERNEL, YARDSTICK = 0, 1
+    runs = [(k, who) for k in range(len(threads)) for who in (KERNEL, YARDSTICK)]
+    best = [[0.0] * len(threads), [0.0] * len(threads)]  # [who][thread count]
     for first in range(0, steps, segment):
         frames = range(first, min(first + segment, steps))
         start, frame, starts = _saved(world), world.frame, [c.copy() for c in cells]
         times = [[float("inf")] * len(threads), [float("inf")] * len(threads)]
         for repeat in range(repeats):
-            for k, ours in runs if repeat % 2 == 0 else reversed(runs):
+            for k, who in runs if repeat % 2 == 0 else reversed(runs):
                 numba.set_num_threads(threads[k])
-                if ours:  # every count steps the world to the same frames: each run ends where the others do
+                if who == KERNEL:  # every count steps the world to the same frames: each run ends where the others do
                     _restore(world, start, frame)
                     began = time.perf_counter()
                     for _ in frames:
@@ -397,10 +390,9 @@ def against_yardstick(
                     began = time.perf_counter()
                     for f in frames:
                         yardstick.step(cells[k], moved, sand, water, f, keys[f], threads[k])
-                taken = time.perf_counter() - began
-                times[not ours][k] = min(times[not ours][k], taken)
+                times[who][k] = min(times[who][k], time.perf_counter() - began)
         best = [[b + t for b, t in zip(bs, ts)] for bs, ts in zip(best, times)]
-    return best[0], best[1]
+    return best[KERNEL], best[YARDSTICK]
 
 
 def max_threads() -> int:

@@ -657,8 +657,10 @@ def _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json) -> No
         ours, theirs = benchmark.against_yardstick(ruleset, scene, size, steps, thread_counts)
         results = [
             benchmark.Yardstick(
-                scene, size, size, steps, threads, round(cells / mine, 1), round(cells / its, 1), round(its / mine, 3),
-                round(ours[0] / mine, 3), round(theirs[0] / its, 3), thread_counts[0],
+                scene, size, size, steps, threads, round(cells / mine, 1), round(ours[0] / mine, 3), thread_counts[0],
+                yardstick_mcell_updates_per_second=round(cells / its, 1),
+                over_yardstick=round(its / mine, 3),
+                yardstick_speedup=round(theirs[0] / its, 3),
             )
             for threads, mine, its in zip(thread_counts, ours, theirs)
         ]
