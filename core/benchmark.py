@@ -21,7 +21,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .compiler import Ruleset
-from .world import CHUNK, World
+from .world import World
 
 #: Elements of the ``everything`` scene and their shares of the cells (the rest is empty).
 EVERYTHING = {
@@ -144,15 +144,6 @@ def state_bytes(world: World) -> int:
     """Bytes of everything a world keeps between steps: its cells and its chunks' bookkeeping."""
     chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations)
     return sum(a.nbytes for a in world.state) + sum((a if a.base is None else a.base).nbytes for a in chunks)
-
-
-def warm_up(ruleset: Ruleset) -> float:
-    """Compile (or load from the cache) the kernels on a tiny world; returns the seconds it took."""
-    started = time.perf_counter()
-    world = World(ruleset, CHUNK, CHUNK)
-    world.paint(np.ones((CHUNK, CHUNK), bool), ruleset.index("sand"))
-    world.step()
-    return time.perf_counter() - started
 
 
 def run(

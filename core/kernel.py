@@ -128,6 +128,12 @@ def _at(y, x):
 
 
 @njit(inline="always", cache=True)
+def _mark(cy, cx):
+    """The index of chunk (cy, cx)'s entry in ``woken`` or ``stirred`` (each entry on a cache line of its own)."""
+    return np.uint64(cy), np.uint64(cx), np.uint64(0)
+
+
+@njit(inline="always", cache=True)
 def _within(v, limit):
     """0 <= v < limit, in one unsigned comparison (a negative v wraps to a huge one)."""
     return np.uint64(v) < np.uint64(limit)
@@ -233,9 +239,9 @@ def _wake(woken, stirred, stir, x0, y0, x1, y1):
     for wy in range(y0 >> CHUNK_SHIFT, (y1 >> CHUNK_SHIFT) + 1):
         oy = wy << CHUNK_SHIFT
         for wx in range(x0 >> CHUNK_SHIFT, (x1 >> CHUNK_SHIFT) + 1):
-            woken[_at(wy, wx)] = _widened(woken[_at(wy, wx)], max(y0 - oy, 0), min(y1 - oy, CHUNK - 1))
+            woken[_mark(wy, wx)] = _widened(woken[_mark(wy, wx)], max(y0 - oy, 0), min(y1 - oy, CHUNK - 1))
             if stir:
-                stirred[_at(wy, wx)] = 1
+                stirred[_mark(wy, wx)] = 1
 
 
 @njit(cache=True)
@@ -276,7 +282,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
         forward = ((frame + y) & 1) == 0
         for j in range(segments):
             cx = first_cx + (j if forward else segments - 1 - j)
-            woke = np.int64(woken[_at(cy, cx)])  # this chunk's new mark, kept here while its row is updated
+            woke = np.int64(woken[_mark(cy, cx)])  # this chunk's new mark, kept here while its row is updated
             row = y - (cy << CHUNK_SHIFT)
             if not (_covers(awake[_at(cy, cx)], row) or _covers(woke, row)):
                 continue  # asleep: nothing in this row of the chunk or within two cells of it changed
@@ -705,12 +711,12 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         # The common case: well inside this chunk.
                         woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))
                         if stir:
-                            stirred[_at(cy, cx)] = 1
+                            stirred[_mark(cy, cx)] = 1
                     else:
-                        woken[_at(cy, cx)] = woke
+                        woken[_mark(cy, cx)] = woke
                         _wake(woken, stirred, stir, wx0, wy0, wx1, wy1)
-                        woke = np.int64(woken[_at(cy, cx)])
-            woken[_at(cy, cx)] = woke
+                        woke = np.int64(woken[_mark(cy, cx)])
+            woken[_mark(cy, cx)] = woke
 
 
 @njit(cache=True)
@@ -744,16 +750,16 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     first_cy, end_cy = y0 >> CHUNK_SHIFT, ((y1 - 1) >> CHUNK_SHIFT) + 1
     for cy in range(first_cy, end_cy):
         for cx in range(first_cx, first_cx + segments):
-            if (awake[_at(cy, cx)] != 0 or woken[_at(cy, cx)] != 0) and (even[_at(cy, cx)] != EVEN or stirred[_at(cy, cx)] != 0):
+            if (awake[_at(cy, cx)] != 0 or woken[_mark(cy, cx)] != 0) and (even[_at(cy, cx)] != EVEN or stirred[_mark(cy, cx)] != 0):
                 even[_at(cy, cx)] = SWEPT  # swept whole: even, unless a pair at two temperatures or a cooling cell stirs it
     for r in range(y1 - y0):
         y = y1 - 1 - r if backwards else y0 + r
         cy = y >> CHUNK_SHIFT
         for j in range(segments):
             cx = first_cx + (segments - 1 - j if backwards else j)
-            if awake[_at(cy, cx)] == 0 and woken[_at(cy, cx)] == 0:
+            if awake[_at(cy, cx)] == 0 and woken[_mark(cy, cx)] == 0:
                 continue
-            if even[_at(cy, cx)] == EVEN and stirred[_at(cy, cx)] == 0:
+            if even[_at(cy, cx)] == EVEN and stirred[_mark(cy, cx)] == 0:
                 continue  # one temperature throughout, as its last sweep found
             uneven = False
             sx0 = max(x0, cx << CHUNK_SHIFT)
@@ -796,7 +802,7 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             if changed_x0 <= changed_x1:  # wake (and stir) the cells next to them and to their partners
                 _wake(woken, stirred, True, max(changed_x0 - 1, 0), max(y - 1, 0), min(changed_x1 + 2, width - 1), min(y + 2, height - 1))
             if uneven:
-                stirred[_at(cy, cx)] = 1
+                stirred[_mark(cy, cx)] = 1
     for cy in range(first_cy, end_cy):
         for cx in range(first_cx, first_cx + segments):
             if even[_at(cy, cx)] == SWEPT:
@@ -867,7 +873,7 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
                 running = False
                 for cy in range(ty * 2, min(ty * 2 + 2, chunks_y)):
                     for cx in range(tx * 2, min(tx * 2 + 2, chunks_x)):
-                        running = running or awake[cy, cx] != 0 or woken[cy, cx] != 0
+                        running = running or awake[cy, cx] != 0 or woken[cy, cx, 0] != 0
                 if running:
                     todo[count] = ty * tiles_x + tx
                     count += 1
@@ -881,10 +887,10 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
                 order[dealt] = todo[k]
                 dealt += 1
         update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count)
-    awake[:] = woken
+    awake[:] = woken[:, :, 0]
     for cy in range(chunks_y):
         for cx in range(chunks_x):
-            if stirred[cy, cx] != 0:
+            if stirred[cy, cx, 0] != 0:
                 even[cy, cx] = 0
     return detonations.sum()
 

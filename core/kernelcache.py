@@ -44,7 +44,7 @@ def is_compiled() -> bool:
 
 
 def mark_compiled() -> None:
-    """Note that the kernels are compiled and cached (call after a step has run)."""
+    """Note that the kernels are compiled and cached (:func:`sandmod.world.compile_kernels` does)."""
     try:
         stamp = _stamp()
         stamp.parent.mkdir(parents=True, exist_ok=True)

@@ -187,13 +187,14 @@ CACHE_LINE = 64  # bytes
 
 
 def _on_own_lines(shape: tuple[int, int], dtype) -> np.ndarray:
-    """A zeroed per-chunk array whose every entry lies on a cache line of its own.
+    """A zeroed per-chunk array whose every entry, ``[cy, cx, 0]``, lies on a cache line of its own.
 
     Threads updating tiles side by side write these marks many times a frame;
     sharing lines, the cores would pass each line back and forth at every write.
+    The array is whole (C-contiguous) whatever the world's size, so that numba
+    compiles the kernel once for worlds of one chunk and of many.
     """
-    spread = CACHE_LINE // np.dtype(dtype).itemsize
-    return np.zeros((shape[0], shape[1] * spread), dtype)[:, ::spread]
+    return np.zeros((*shape, CACHE_LINE // np.dtype(dtype).itemsize), dtype)
 
 
 class World:
@@ -472,3 +473,23 @@ class World:
                 level = np.minimum((units[hot] - start[hot]) // temperature_units(GLOW_STEP), len(GLOW_COLOURS) - 1)
                 frame[hot] = looks.glow[shown[hot], level]
         return frame
+
+
+def compile_kernels(ruleset: Ruleset) -> float:
+    """Compile (or load from the cache) every kernel a world uses, on a tiny empty world:
+    a step, and taking and setting off explosions (none); then note this version as
+    compiled (:mod:`sandmod.kernelcache`). Returns the seconds it took.
+
+    A world compiles each kernel when it first needs it, so without this the first
+    explosion after a new version would stop a render for a while, unannounced.
+    """
+    import time
+
+    from . import kernelcache
+
+    started = time.perf_counter()
+    world = World(ruleset, CHUNK, CHUNK)
+    world.step()
+    world._explode(world._kernel().take_detonations(world.state, world.tables, world._detonations), 0)
+    kernelcache.mark_compiled()
+    return time.perf_counter() - started

@@ -15,7 +15,8 @@ from click.testing import CliRunner
 
 from sandmod import benchmark, kernelcache
 from sandmod.tools.cli import cli
-from sandmod.world import World
+from sandmod.compiler import BLAST_COLUMNS
+from sandmod.world import World, compile_kernels
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 KEYS = {
@@ -66,6 +67,30 @@ def test_bench_rejects_sizes_out_of_range():
 def test_no_sleep_updates_every_chunk(ruleset):
     kept = benchmark.run(ruleset, "settled", 256, 2, 1, sleep=False)
     assert kept.awake_fraction == 1.0 and not kept.sleep
+
+
+def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tmp_path, monkeypatch):
+    """Every kernel a world calls, explosions' too: a first explosion must not compile unannounced later."""
+    called = []
+
+    class Recording:
+        def step(self, *args):
+            called.append("step")
+            return 0
+
+        def take_detonations(self, *args):
+            called.append("take_detonations")
+            return np.zeros((0, BLAST_COLUMNS), np.int64)
+
+        def explode(self, *args):
+            called.append("explode")
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(World, "kernel", Recording())
+    assert not kernelcache.is_compiled()
+    compile_kernels(ruleset)
+    assert called == ["step", "take_detonations", "explode"]
+    assert kernelcache.is_compiled()
 
 
 def test_the_first_render_of_a_version_says_it_compiles(tmp_path, monkeypatch):

@@ -71,6 +71,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     from sandmod.recording import output_bytes
     from sandmod.render import Framing
     from sandmod.render import render as run
+    from sandmod.world import compile_kernels
 
     loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
     warnings = [str(w) for w in loaded.warnings]
@@ -86,8 +87,10 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     recorder, output = _recorder_and_output(loaded, world, output, format_name)
     framing = Framing(scale or settings.scale, _crop(loaded, crop))
     frames = frames or settings.frames
-    if not kernelcache.is_compiled() and not quiet:
-        click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
+    if not kernelcache.is_compiled():
+        if not quiet:
+            click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
+        compile_kernels(loaded.world.ruleset)
     started = time.perf_counter()
     options = dict(
         frames=frames,
@@ -108,7 +111,6 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
 
         with _writing(save_snapshot):
             save(loaded.world, save_snapshot)
-    kernelcache.mark_compiled()
     if not quiet:
         extras = "".join(f", {what} {display_path(path)}" for what, path in (("still", still), ("snapshot", save_snapshot)) if path)
         click.echo(
@@ -459,9 +461,10 @@ def test_(mods, mod_dirs) -> None:
     test passed, 1 when one failed, 2 when a file has a mistake.
     """
     from sandmod import kernelcache
-    from sandmod.loading import load_registry
+    from sandmod.loading import load_registry, load_ruleset
     from sandmod.modset import discover_mods
     from sandmod.modtests import TestRunner
+    from sandmod.world import compile_kernels
 
     folders = _mod_folders(mod_dirs)
     modset, problems = discover_mods(load_registry(), folders)
@@ -474,6 +477,7 @@ def test_(mods, mod_dirs) -> None:
         click.echo("no tests found" + (f" in mods {', '.join(mods)}" if mods else ""))
     elif not kernelcache.is_compiled():
         click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
+        compile_kernels(load_ruleset())
     started, failed, errors = time.perf_counter(), 0, 0
     for case in cases:
         try:
@@ -483,7 +487,6 @@ def test_(mods, mod_dirs) -> None:
             errors += 1
             click.echo(f"{case.id} ... ERROR (see below)")
             continue
-        kernelcache.mark_compiled()
         click.echo(f"{case.id} ... {'ok' if outcome.passed else 'FAILED'}")
         if not outcome.passed:
             failed += 1
@@ -555,14 +558,14 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     import numba
 
     from sandmod.loading import load_ruleset
+    from sandmod.world import compile_kernels
 
     if max(thread_counts) > numba.config.NUMBA_NUM_THREADS:  # numba was imported before us, with fewer
         raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
     ruleset = load_ruleset()
     if not kernelcache.is_compiled():
         click.echo("compiling the kernel (once per version, about half a minute)...", err=True)
-    compile_seconds = benchmark.warm_up(ruleset)
-    kernelcache.mark_compiled()
+    compile_seconds = compile_kernels(ruleset)
     if formats:
         _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)
         return
