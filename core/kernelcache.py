@@ -39,7 +39,7 @@ def _stamp() -> Path:
 
 
 def is_compiled() -> bool:
-    """Have this version's kernels been compiled and cached (so a start takes a second, not half a minute)?"""
+    """Have this version's kernels been compiled and cached (so a start takes a second, not a minute)?"""
     return _stamp().exists()
 
 

@@ -188,7 +188,7 @@ def test_the_marks_threads_write_lie_on_cache_lines_of_their_own(ruleset):
 
 @pytest.mark.parametrize("size", [(8, 8), (32, 32), (20, 100), (100, 20)])
 def test_worlds_of_every_size_give_the_kernel_the_same_types(ruleset, size):
-    """Numba compiles the kernel anew for each set of argument types (half a minute): a world of one
+    """Numba compiles the kernel anew for each set of argument types (about a minute): a world of one
     chunk must not need a compile of its own after a render of a larger one, or the other way round."""
     typed = lambda world: [numba.typeof(a) for a in (world.state, world.tables, world.awake, world._woken, world._even, world._stirred, world._detonations)]
     assert typed(World(ruleset, *size)) == typed(World(ruleset, 100, 70))
