@@ -121,6 +121,20 @@ def test_list_provenance_shows_overrides(tmp_path, monkeypatch):
     assert "color ['#dcc38a', '#d2b478', '#e4cf9c'] -> ['#cc3322']" in lines[at + 1]
 
 
+def test_a_new_world_pours_the_users_own_element_else_sand(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    poured = lambda: tomllib.loads((tmp_path / "w.toml").read_text())["emitters"][0]["element"]
+    assert invoke("new", "world", "w").exit_code == 0
+    assert poured() == "sand:sand"  # of all the bundled mods, not the first one loaded
+    assert invoke("new", "mod", "mud").exit_code == 0
+    (tmp_path / "w.toml").unlink()
+    assert invoke("new", "world", "w").exit_code == 0
+    assert poured() == "mud:mud"
+    (tmp_path / "w.toml").unlink()
+    assert invoke("new", "world", "w", "--mod", "water").exit_code == 0
+    assert poured() == "water:water"
+
+
 def test_worlds_record_their_mods_and_warn_when_they_differ(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert invoke("new", "world", "w", "--mod", "sand", "--size", "32", "32").exit_code == 0

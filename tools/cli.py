@@ -380,7 +380,7 @@ def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
 @new.command("world")
 @click.argument("name", callback=_name(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", "file name"))
 @click.option("--mod", "mods", multiple=True, help="A mod the world loads (repeatable; default: every mod found).")
-@click.option("--pour", help="The element its emitter pours (default: the first one of the mods).")
+@click.option("--pour", help="The element its emitter pours (default: a powder or liquid of your own mods, else sand).")
 @click.option("--size", type=(click.IntRange(16, 4096), click.IntRange(16, 4096)), default=(160, 120), show_default=True)
 @_mods_option
 def new_world(name, mods, pour, size, mod_dirs) -> None:
@@ -392,10 +392,12 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
 
     modset = find_mods(load_registry(), _mod_folders(mod_dirs))
     ruleset = compile_mods(modset.select(list(mods) or None))
-    if pour is None:
-        wanted = [m for m in ruleset.mods if not mods or m.name in mods]
-        movers = [e for e in ruleset.elements if e.spec.archetype in ("powder", "liquid") and any(e.defined_by == m.name for m in wanted)]
-        pour = (movers or [e for e in ruleset.elements if e.index])[0].id
+    if pour is None:  # a powder or liquid of the user's own mods (the one just written, say), else sand
+        wanted = {m.name: m for m in ruleset.mods if not mods or m.name in mods}
+        movers = [e for e in ruleset.elements if e.spec.archetype in ("powder", "liquid") and e.defined_by in wanted]
+        own = [e for e in movers if wanted[e.defined_by].plugin == "user"]
+        sand = [e for e in movers if e.id == "sand:sand"]
+        pour = (own or sand or movers or [e for e in ruleset.elements if e.index])[0].id
     else:
         try:
             pour = ruleset.elements[ruleset.index(pour)].id
