@@ -867,7 +867,7 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
         # Alternate which rows of tiles go first, so a falling stream crosses each seam in step.
         py = (p >> 1) ^ (frame & 1) ^ 1
         px = (p & 1) ^ ((frame >> 1) & 1)
-        count = 0
+        count = np.int64(0)  # not the literal 0: numba would compile update_tiles a second time for it
         for ty in range(py, tiles_y, 2):
             for tx in range(px, tiles_x, 2):
                 running = False
