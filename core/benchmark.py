@@ -188,9 +188,28 @@ class FramesDiffer(Exception):
         self.frame = frame
 
 
-def load_kernel(path) -> ModuleType:
+class _FlatMarks:
+    """A kernel from before the chunk marks ``woken`` and ``stirred`` had a cache line each as a third
+    axis (entry ``[cy, cx, 0]``): its ``step`` is handed the (rows, cols) views of them it was written for."""
+
+    def __init__(self, module: ModuleType):
+        self.module = module
+
+    def __getattr__(self, name: str):
+        return getattr(self.module, name)
+
+    def step(self, *args):
+        return self.module.step(*(a[:, :, 0] if isinstance(a, np.ndarray) and a.ndim == 3 else a for a in args))
+
+
+def load_kernel(path) -> ModuleType | _FlatMarks:
     """Another version of ``sandmod/kernel.py`` (say, from ``git show REV:core/kernel.py``), importable
     beside this one; its relative imports name this sandmod's modules. Raises ValueError if it is none."""
+    module = _import_kernel(path)
+    return module if hasattr(module, "_mark") else _FlatMarks(module)
+
+
+def _import_kernel(path) -> ModuleType:
     # One name per file, the same in every process, and registered: numba's cache records the module
     # of what it compiled and imports it by that name when it loads the cached code.
     name = "sandmod._kernel_" + hashlib.sha1(str(Path(path).resolve()).encode()).hexdigest()[:12]

@@ -185,6 +185,16 @@ def test_bench_against_another_kernel_file(tmp_path):
     assert result.exit_code == 2 and "not a sandmod kernel (no take_detonations, explode)" in result.output
 
 
+def test_a_kernel_from_before_the_marks_had_their_own_lines_is_handed_them_flat(tmp_path):
+    (tmp_path / "kernel.py").write_text(
+        "def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands):\n"
+        "    return woken.shape, stirred.shape, awake.shape\n\n\ntake_detonations = explode = step\n"
+    )
+    marks = np.zeros((3, 4, 32), np.uint16)
+    old = benchmark.load_kernel(tmp_path / "kernel.py")
+    assert old.step(0, 0, 0, 0, 0, 0, marks[:, :, 0], marks, 0, marks, 0, 1) == ((3, 4), (3, 4), (3, 4))
+
+
 def test_a_kernel_file_loads_from_numbas_cache_in_a_later_process(tmp_path):
     # numba's cache imports the module of what it compiled by name: a second process must find it.
     (tmp_path / "kernel.py").write_text(
