@@ -183,6 +183,12 @@ def test_bench_against_another_kernel_file(tmp_path):
     (tmp_path / "other.py").write_text("def step():\n    pass\n")
     result = CliRunner().invoke(cli, [*args, "--against", str(tmp_path / "other.py")])
     assert result.exit_code == 2 and "not a sandmod kernel (no take_detonations, explode)" in result.output
+    (tmp_path / "misfit.py").write_text(
+        "from numba import njit\n\n\n@njit\ndef step(s, t, a, b, c, frame, awake, woken, even, stirred, detonations, hands):\n"
+        "    return woken[0, 0, 0, 0]\n\n\ntake_detonations = explode = step\n"
+    )
+    result = CliRunner().invoke(cli, [*args, "--against", str(tmp_path / "misfit.py")])
+    assert result.exit_code == 2 and "misfit.py: does not compile beside this sandmod (TypingError: " in result.output
 
 
 def test_a_kernel_from_before_the_marks_had_their_own_lines_is_handed_them_flat(tmp_path):

@@ -608,6 +608,8 @@ def _report(result, as_json: bool, line: str) -> None:
 
 
 def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -> None:
+    from numba.core.errors import NumbaError
+
     from sandmod import benchmark, kernel
 
     try:
@@ -622,6 +624,9 @@ def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -
             except benchmark.FramesDiffer as differ:
                 click.echo(f"error: {scene}: {path} steps to other frames than this kernel (by frame {differ.frame})", err=True)
                 sys.exit(1)
+            except NumbaError as error:  # it imports, but its code does not fit this sandmod's arrays
+                first = str(error).strip().splitlines()[0]
+                raise click.BadParameter(f"{path}: does not compile beside this sandmod ({type(error).__name__}: {first})", param_hint="'--against'") from None
             result = benchmark.Comparison(
                 scene, size, size, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3)
             )
