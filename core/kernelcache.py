@@ -12,6 +12,9 @@ import sys
 from importlib import metadata
 from pathlib import Path
 
+#: What the commands (and the pytest plugin) say before they compile a new version's kernels.
+NOTICE = "compiling the kernel (once per version, about a minute)..."
+
 # The files whose code or constants the compiled kernels contain.
 _KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compiler.py")
 

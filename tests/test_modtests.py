@@ -168,6 +168,18 @@ def test_pytest_collects_mod_tests_without_a_conftest(pytester):
     assert "Traceback" not in result.stdout.str() and "def runtest" not in result.stdout.str()
 
 
+def test_pytest_compiles_a_new_versions_kernels_before_the_mod_tests_and_says_so(pytester, monkeypatch):
+    from sandmod import kernelcache
+
+    pytester.makefile(".toml", **{"mods/fizz": textwrap.dedent(FIZZ)})
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(pytester.path / "cache"))  # no stamp there: as on a first run
+    first = pytester.runpytest_inprocess()
+    first.stdout.fnmatch_lines([f"sandmod: {kernelcache.NOTICE}"])
+    assert kernelcache.is_compiled()
+    again = pytester.runpytest_inprocess()
+    assert "compiling" not in again.stdout.str()
+
+
 def test_pytest_reports_a_broken_mod_file_as_one_clean_error(pytester):
     pytester.makefile(".toml", **{"mods/fizz": textwrap.dedent(FIZZ).replace("density = 900", "density = -1")})
     result = pytester.runpytest()

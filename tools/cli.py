@@ -13,8 +13,6 @@ import click
 from sandmod import __version__
 from sandmod.errors import Problem, ProblemsError, display_path
 
-COMPILING = "compiling the kernel (once per version, about a minute)..."  # before the first run of a new version
-
 EXIT_USER_ERROR = 2
 
 
@@ -91,7 +89,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     frames = frames or settings.frames
     if not kernelcache.is_compiled():
         if not quiet:
-            click.echo(COMPILING, err=True)
+            click.echo(kernelcache.NOTICE, err=True)
         compile_kernels(loaded.world.ruleset)
     started = time.perf_counter()
     options = dict(
@@ -480,7 +478,7 @@ def test_(mods, mod_dirs) -> None:
     if not cases:
         click.echo("no tests found" + (f" in mods {', '.join(mods)}" if mods else ""))
     elif not kernelcache.is_compiled():
-        click.echo(COMPILING, err=True)
+        click.echo(kernelcache.NOTICE, err=True)
         compile_kernels(load_ruleset())
     started, failed, errors = time.perf_counter(), 0, 0
     for case in cases:
@@ -568,7 +566,7 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
         raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
     ruleset = load_ruleset()
     if not kernelcache.is_compiled():
-        click.echo(COMPILING, err=True)
+        click.echo(kernelcache.NOTICE, err=True)
     compile_seconds = compile_kernels(ruleset)
     if formats:
         _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)

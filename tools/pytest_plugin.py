@@ -29,6 +29,21 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector):
     return None
 
 
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Compile a new version's kernels before the first mod test, saying so, rather than stall in it."""
+    from sandmod import kernelcache
+
+    if kernelcache.is_compiled() or not any(isinstance(item, ModTestItem) for item in session.items):
+        return
+    from sandmod.loading import load_ruleset
+    from sandmod.world import compile_kernels
+
+    reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line(f"sandmod: {kernelcache.NOTICE}")
+    compile_kernels(load_ruleset())
+
+
 def _looks_like_mod(path: Path) -> bool:
     try:
         return "[mod]" in path.read_text(encoding="utf-8", errors="replace")
