@@ -6,6 +6,7 @@ without paying for it.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import sys
@@ -15,12 +16,25 @@ from pathlib import Path
 #: What the commands (and the pytest plugin) say before they compile a new version's kernels.
 NOTICE = "compiling the kernel (once per version, about a minute)..."
 
-# The files whose code or constants the compiled kernels contain.
-_KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compiler.py")
+#: The files whose code or constants the compiled kernels contain: every module kernel.py takes
+#: names from. Numba notices a change to a kernel's own file only (it keeps the values of globals
+#: taken from other modules as they were when it compiled), so the cache folder is named after them.
+KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compiler.py", "modspec.py")
+
+
+@functools.cache
+def version_hash(folder: Path = Path(__file__).parent) -> str:
+    """A hash of the kernel sources in ``folder`` and of numba's and Python's versions:
+    compiled kernels are good for exactly these."""
+    h = hashlib.sha256(f"{sys.version_info[:2]} {metadata.version('numba')}".encode())
+    for name in KERNEL_SOURCES:
+        h.update((folder / name).read_bytes())
+    return h.hexdigest()[:16]
 
 
 def kernel_cache_dir() -> Path:
-    """Where compiled kernels are kept: ``$NUMBA_CACHE_DIR``, else the user's cache folder.
+    """Where compiled kernels are kept: ``$NUMBA_CACHE_DIR``, else a folder of the user's cache
+    named after :func:`version_hash`, so that a change to any kernel source compiles them anew.
 
     Not beside the installed package, where numba would put them by default:
     files pip did not install would survive an uninstall there, leaving a
@@ -29,16 +43,12 @@ def kernel_cache_dir() -> Path:
     if os.environ.get("NUMBA_CACHE_DIR"):
         return Path(os.environ["NUMBA_CACHE_DIR"])
     base = os.environ.get("XDG_CACHE_HOME") or os.environ.get("LOCALAPPDATA") or Path.home() / ".cache"
-    return Path(base) / "sandmod" / "numba"
+    return Path(base) / "sandmod" / "numba" / version_hash()
 
 
 def _stamp() -> Path:
     """A file that exists once kernels of exactly this code, numba and Python have been compiled."""
-    h = hashlib.sha256(f"{sys.version_info[:2]} {metadata.version('numba')}".encode())
-    here = Path(__file__).parent
-    for name in _KERNEL_SOURCES:
-        h.update((here / name).read_bytes())
-    return kernel_cache_dir() / f"compiled-{h.hexdigest()[:16]}"
+    return kernel_cache_dir() / f"compiled-{version_hash()}"
 
 
 def is_compiled() -> bool:

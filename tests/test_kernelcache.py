@@ -1,0 +1,45 @@
+"""Where compiled kernels are kept: a folder per version of the kernel's sources."""
+
+from __future__ import annotations
+
+import ast
+import shutil
+from pathlib import Path
+
+from sandmod import kernelcache
+
+CORE = Path(kernelcache.__file__).parent
+
+
+def test_the_version_covers_every_module_the_kernel_takes_names_from():
+    """Numba keeps globals from other modules as they were when it compiled: each must be hashed."""
+    tree = ast.parse((CORE / "kernel.py").read_text(encoding="utf-8"))
+    taken = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.level == 1:
+            taken |= {f"{node.module}.py"} if node.module else {f"{alias.name}.py" for alias in node.names}
+    taken.discard("kernelcache.py")  # where the cache is, not what is compiled
+    assert taken and taken <= set(kernelcache.KERNEL_SOURCES)
+
+
+def test_a_change_to_any_kernel_source_is_another_version(tmp_path):
+    for name in kernelcache.KERNEL_SOURCES:
+        shutil.copy(CORE / name, tmp_path / name)
+    assert kernelcache.version_hash(tmp_path) == kernelcache.version_hash()
+    seen = {kernelcache.version_hash()}
+    for name in kernelcache.KERNEL_SOURCES:
+        copy = tmp_path / name
+        original = copy.read_bytes()
+        copy.write_bytes(original + b"\n# edited\n")
+        kernelcache.version_hash.cache_clear()
+        seen.add(kernelcache.version_hash(tmp_path))
+        copy.write_bytes(original)
+    assert len(seen) == len(kernelcache.KERNEL_SOURCES) + 1
+
+
+def test_kernels_are_kept_in_a_folder_of_their_version_unless_numba_is_told_where(tmp_path, monkeypatch):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert kernelcache.kernel_cache_dir() == tmp_path / "sandmod" / "numba" / kernelcache.version_hash()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    assert kernelcache.kernel_cache_dir() == tmp_path / "mine"
