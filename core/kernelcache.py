@@ -24,9 +24,9 @@ KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compil
 
 @functools.cache
 def version_hash(folder: Path = Path(__file__).parent) -> str:
-    """A hash of the kernel sources in ``folder`` and of numba's and Python's versions:
-    compiled kernels are good for exactly these."""
-    h = hashlib.sha256(f"{sys.version_info[:2]} {metadata.version('numba')}".encode())
+    """A hash of the kernel sources in ``folder``, where they are, and numba's and Python's versions:
+    compiled kernels are good for exactly these (numba files its cache by the source's path)."""
+    h = hashlib.sha256(f"{sys.version_info[:2]} {metadata.version('numba')} {folder.resolve()}".encode())
     for name in KERNEL_SOURCES:
         h.update((folder / name).read_bytes())
     return h.hexdigest()[:16]
