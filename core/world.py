@@ -475,10 +475,11 @@ class World:
         return frame
 
 
-def compile_kernels(ruleset: Ruleset) -> float:
-    """Compile (or load from the cache) every kernel a world uses, on a tiny empty world:
-    a step, and taking and setting off explosions (none); then note this version as
-    compiled (:mod:`sandmod.kernelcache`). Returns the seconds it took.
+def compile_kernels(ruleset: Ruleset | None = None) -> float:
+    """Compile (or load from the cache) every kernel a world uses, on a tiny empty world of
+    ``ruleset`` (default: the bundled mods'): a step, and taking and setting off explosions
+    (none); then note this version as compiled (:mod:`sandmod.kernelcache`). Returns the
+    seconds it took.
 
     A world compiles each kernel when it first needs it, so without this the first
     explosion after a new version would stop a render for a while, unannounced.
@@ -488,8 +489,24 @@ def compile_kernels(ruleset: Ruleset) -> float:
     from . import kernelcache
 
     started = time.perf_counter()
+    if ruleset is None:
+        from .loading import load_ruleset
+
+        ruleset = load_ruleset()
     world = World(ruleset, CHUNK, CHUNK)
     world.step()
     world._explode(world._kernel().take_detonations(world.state, world.tables, world._detonations), 0)
     kernelcache.mark_compiled()
     return time.perf_counter() - started
+
+
+def compile_new_kernels(ruleset: Ruleset | None = None, announce: Callable[[str], object] | None = None) -> None:
+    """:func:`compile_kernels` if this version's are not compiled yet, first handing
+    ``announce`` (when given) the notice to show (:data:`sandmod.kernelcache.NOTICE`)."""
+    from . import kernelcache
+
+    if kernelcache.is_compiled():
+        return
+    if announce is not None:
+        announce(kernelcache.NOTICE)
+    compile_kernels(ruleset)

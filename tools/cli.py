@@ -39,6 +39,11 @@ def _mod_folders(mod_dirs) -> list[Path]:
     return ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
 
 
+def _say(message: str) -> None:
+    """A line for people, on stderr (out of the way of output that may be piped)."""
+    click.echo(message, err=True)
+
+
 _mods_option = click.option(
     "--mods",
     "mod_dirs",
@@ -66,12 +71,11 @@ _mods_option = click.option(
 @_mods_option
 def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, quiet, mod_dirs) -> None:
     """Simulate WORLD (a world .toml file) and write an animation."""
-    from sandmod import kernelcache
     from sandmod.loading import load_world
     from sandmod.recording import output_bytes
     from sandmod.render import Framing
     from sandmod.render import render as run
-    from sandmod.world import compile_kernels
+    from sandmod.world import compile_new_kernels
 
     loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
     warnings = [str(w) for w in loaded.warnings]
@@ -87,10 +91,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     recorder, output = _recorder_and_output(loaded, world, output, format_name)
     framing = Framing(scale or settings.scale, _crop(loaded, crop))
     frames = frames or settings.frames
-    if not kernelcache.is_compiled():
-        if not quiet:
-            click.echo(kernelcache.NOTICE, err=True)
-        compile_kernels(loaded.world.ruleset)
+    compile_new_kernels(loaded.world.ruleset, announce=None if quiet else _say)
     started = time.perf_counter()
     options = dict(
         frames=frames,
@@ -462,11 +463,10 @@ def test_(mods, mod_dirs) -> None:
     plugins' folders, ./mods and every --mods DIR. Exit status: 0 when every
     test passed, 1 when one failed, 2 when a file has a mistake.
     """
-    from sandmod import kernelcache
-    from sandmod.loading import load_registry, load_ruleset
+    from sandmod.loading import load_registry
     from sandmod.modset import discover_mods
     from sandmod.modtests import TestRunner
-    from sandmod.world import compile_kernels
+    from sandmod.world import compile_new_kernels
 
     folders = _mod_folders(mod_dirs)
     modset, problems = discover_mods(load_registry(), folders)
@@ -477,9 +477,8 @@ def test_(mods, mod_dirs) -> None:
         raise ProblemsError(problems + exc.problems) from None
     if not cases:
         click.echo("no tests found" + (f" in mods {', '.join(mods)}" if mods else ""))
-    elif not kernelcache.is_compiled():
-        click.echo(kernelcache.NOTICE, err=True)
-        compile_kernels(load_ruleset())
+    else:
+        compile_new_kernels(announce=_say)
     started, failed, errors = time.perf_counter(), 0, 0
     for case in cases:
         try:
@@ -566,7 +565,7 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
         raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
     ruleset = load_ruleset()
     if not kernelcache.is_compiled():
-        click.echo(kernelcache.NOTICE, err=True)
+        _say(kernelcache.NOTICE)
     compile_seconds = compile_kernels(ruleset)
     if formats:
         _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)

@@ -31,17 +31,12 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector):
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     """Compile a new version's kernels before the first mod test, saying so, rather than stall in it."""
-    from sandmod import kernelcache
-
-    if kernelcache.is_compiled() or not any(isinstance(item, ModTestItem) for item in session.items):
+    if not any(isinstance(item, ModTestItem) for item in session.items):
         return
-    from sandmod.loading import load_ruleset
-    from sandmod.world import compile_kernels
+    from sandmod.world import compile_new_kernels
 
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
-    if reporter is not None:
-        reporter.write_line(f"sandmod: {kernelcache.NOTICE}")
-    compile_kernels(load_ruleset())
+    compile_new_kernels(announce=None if reporter is None else lambda notice: reporter.write_line(f"sandmod: {notice}"))
 
 
 def _looks_like_mod(path: Path) -> bool:
