@@ -210,6 +210,13 @@ def load_kernel(path) -> ModuleType | _FlatMarks:
 
 
 def _import_kernel(path) -> ModuleType:
+    from . import kernel
+
+    if Path(path).resolve() == Path(kernel.__file__).resolve():
+        # Itself: imported again under another name, it would share numba's cache files with this
+        # kernel, and a compile of it (after an edit) would leave this kernel's cached code naming
+        # a module that later processes cannot import.
+        return kernel
     # One name per file, the same in every process, and registered: numba's cache records the module
     # of what it compiled and imports it by that name when it loads the cached code.
     name = "sandmod._kernel_" + hashlib.sha1(str(Path(path).resolve()).encode()).hexdigest()[:12]

@@ -159,6 +159,14 @@ def test_compare_times_kernels_that_step_to_the_same_frames(ruleset):
     assert len(seconds) == 2 and min(seconds) > 0
 
 
+def test_the_kernel_compared_with_its_own_file_is_itself():
+    """A second import of kernel.py would write numba's cache files of the first under another module's
+    name: after an edit, a later process would load code that names a module it cannot import."""
+    from sandmod import kernel
+
+    assert benchmark.load_kernel(Path(kernel.__file__)) is kernel
+
+
 def test_compare_finds_the_stretch_where_frames_part(ruleset):
     from sandmod import kernel
 
