@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import shutil
 import sys
 from importlib import metadata
 from pathlib import Path
@@ -21,15 +22,29 @@ NOTICE = "compiling the kernel (once per version, about a minute)..."
 #: taken from other modules as they were when it compiled), so the cache folder is named after them.
 KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compiler.py", "modspec.py")
 
+#: The folder they are in: this package's.
+SOURCES = Path(__file__).parent
+
+
+def _setting(folder: Path) -> str:
+    """What compiled kernels are good for besides the sources' contents: Python's and numba's
+    versions, and where the sources are (numba files its cache by the source's path)."""
+    return f"{sys.version_info[:2]} {metadata.version('numba')} {folder.resolve()}"
+
 
 @functools.cache
-def version_hash(folder: Path = Path(__file__).parent) -> str:
-    """A hash of the kernel sources in ``folder``, where they are, and numba's and Python's versions:
-    compiled kernels are good for exactly these (numba files its cache by the source's path)."""
-    h = hashlib.sha256(f"{sys.version_info[:2]} {metadata.version('numba')} {folder.resolve()}".encode())
+def version_hash(folder: Path = SOURCES) -> str:
+    """A hash of the kernel sources in ``folder`` and of :func:`_setting`: a version of the kernels."""
+    h = hashlib.sha256(_setting(folder).encode())
     for name in KERNEL_SOURCES:
         h.update((folder / name).read_bytes())
     return h.hexdigest()[:16]
+
+
+def _versions() -> Path:
+    """The folder of the version folders, in the user's cache."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.environ.get("LOCALAPPDATA") or Path.home() / ".cache"
+    return Path(base) / "sandmod" / "numba"
 
 
 def kernel_cache_dir() -> Path:
@@ -42,8 +57,7 @@ def kernel_cache_dir() -> Path:
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return Path(os.environ["NUMBA_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or os.environ.get("LOCALAPPDATA") or Path.home() / ".cache"
-    return Path(base) / "sandmod" / "numba" / version_hash()
+    return _versions() / version_hash()
 
 
 def _stamp() -> Path:
@@ -57,10 +71,35 @@ def is_compiled() -> bool:
 
 
 def mark_compiled() -> None:
-    """Note that the kernels are compiled and cached (:func:`sandmod.world.compile_kernels` does)."""
+    """Note that the kernels are compiled and cached (:func:`sandmod.world.compile_kernels` does),
+    and remove the compiled kernels of this copy's earlier versions."""
     try:
         stamp = _stamp()
         stamp.parent.mkdir(parents=True, exist_ok=True)
-        stamp.touch()
+        stamp.write_text(_setting(SOURCES), encoding="utf-8")
     except OSError:
-        pass  # a read-only cache only costs the message being shown again
+        return  # a read-only cache only costs the message being shown again
+    _forget_earlier_versions()
+
+
+def _forget_earlier_versions() -> None:
+    """Remove the version folders beside this one whose stamp names this one's setting: kernels of
+    these sources as they were before an edit or an upgrade, which nothing will load again.
+
+    Other copies of sandmod, and this copy under another Python or numba, keep theirs, and so do
+    folders without such a stamp (still compiling, or from before stamps named their setting).
+    A folder that numba was told to use (``NUMBA_CACHE_DIR``) is not ours to tidy.
+    """
+    here = kernel_cache_dir()
+    if here != _versions() / version_hash():
+        return
+    setting = _setting(SOURCES)
+    for other in here.parent.iterdir():
+        if other == here or not other.is_dir():
+            continue
+        try:
+            earlier = (other / f"compiled-{other.name}").read_text(encoding="utf-8") == setting
+        except (OSError, UnicodeDecodeError):
+            continue
+        if earlier:
+            shutil.rmtree(other, ignore_errors=True)

@@ -43,3 +43,37 @@ def test_kernels_are_kept_in_a_folder_of_their_version_unless_numba_is_told_wher
     assert kernelcache.kernel_cache_dir() == tmp_path / "sandmod" / "numba" / kernelcache.version_hash()
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
     assert kernelcache.kernel_cache_dir() == tmp_path / "mine"
+
+
+def test_compiling_removes_the_kernels_of_this_copys_earlier_versions_only(tmp_path, monkeypatch):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    versions = tmp_path / "sandmod" / "numba"
+    current = kernelcache.version_hash()
+    with monkeypatch.context() as before_an_edit:
+        before_an_edit.setattr(kernelcache, "version_hash", lambda folder=kernelcache.SOURCES: "0" * 16)
+        kernelcache.mark_compiled()
+        (versions / ("0" * 16) / "kernel.step.nbi").write_bytes(b"compiled code")
+    other_copy = versions / ("1" * 16)  # another checkout, or this one under another numba
+    other_copy.mkdir()
+    (other_copy / f"compiled-{'1' * 16}").write_text("(3, 11) 0.1.0 /elsewhere/core", encoding="utf-8")
+    compiling = versions / ("2" * 16)  # no stamp yet
+    compiling.mkdir()
+    unmarked = versions / ("3" * 16)  # stamped before stamps named their setting
+    unmarked.mkdir()
+    (unmarked / f"compiled-{'3' * 16}").touch()
+
+    kernelcache.mark_compiled()
+
+    assert kernelcache.is_compiled()
+    assert sorted(p.name for p in versions.iterdir()) == sorted([current, "1" * 16, "2" * 16, "3" * 16])
+
+
+def test_a_cache_folder_numba_was_told_to_use_is_left_as_it_is(tmp_path, monkeypatch):
+    with monkeypatch.context() as before_an_edit:
+        before_an_edit.setattr(kernelcache, "version_hash", lambda folder=kernelcache.SOURCES: "0" * 16)
+        before_an_edit.setenv("NUMBA_CACHE_DIR", str(tmp_path / ("0" * 16)))
+        kernelcache.mark_compiled()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    kernelcache.mark_compiled()
+    assert kernelcache.is_compiled() and (tmp_path / ("0" * 16) / f"compiled-{'0' * 16}").exists()
