@@ -73,17 +73,18 @@ def is_compiled() -> bool:
 def mark_compiled() -> None:
     """Note that the kernels are compiled and cached (:func:`sandmod.world.compile_kernels` does),
     and remove the compiled kernels of this copy's earlier versions."""
+    setting = _setting(SOURCES)
     try:
         stamp = _stamp()
         stamp.parent.mkdir(parents=True, exist_ok=True)
-        stamp.write_text(_setting(SOURCES), encoding="utf-8")
+        stamp.write_text(setting, encoding="utf-8")
     except OSError:
         return  # a read-only cache only costs the message being shown again
-    _forget_earlier_versions()
+    _forget_earlier_versions(setting)
 
 
-def _forget_earlier_versions() -> None:
-    """Remove the version folders beside this one whose stamp names this one's setting: kernels of
+def _forget_earlier_versions(setting: str) -> None:
+    """Remove the version folders beside this one whose stamp names ``setting``, this one's: kernels of
     these sources as they were before an edit or an upgrade, which nothing will load again.
 
     Other copies of sandmod, and this copy under another Python or numba, keep theirs, and so do
@@ -93,7 +94,6 @@ def _forget_earlier_versions() -> None:
     here = kernel_cache_dir()
     if here != _versions() / version_hash():
         return
-    setting = _setting(SOURCES)
     for other in here.parent.iterdir():
         if other == here or not other.is_dir():
             continue
