@@ -22,6 +22,9 @@ NOTICE = "compiling the kernel (once per version, about a minute)..."
 #: taken from other modules as they were when it compiled), so the cache folder is named after them.
 KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compiler.py", "modspec.py")
 
+#: How many earlier versions of these sources keep their compiled kernels (about 5 MB each).
+KEPT_VERSIONS = 2
+
 #: The folder they are in: this package's.
 SOURCES = Path(__file__).parent
 
@@ -72,7 +75,7 @@ def is_compiled() -> bool:
 
 def mark_compiled() -> None:
     """Note that the kernels are compiled and cached (:func:`sandmod.world.compile_kernels` does),
-    and remove the compiled kernels of this copy's earlier versions."""
+    and remove the compiled kernels of this copy's older versions."""
     setting = _setting(SOURCES)
     try:
         stamp = _stamp()
@@ -85,7 +88,8 @@ def mark_compiled() -> None:
 
 def _forget_earlier_versions(setting: str) -> None:
     """Remove the version folders beside this one whose stamp names ``setting``, this one's: kernels of
-    these sources as they were before an edit or an upgrade, which nothing will load again.
+    these sources as they were before an edit or an upgrade. The :data:`KEPT_VERSIONS` last compiled
+    stay, so that going back (a branch, an undone edit) does not compile again.
 
     Other copies of sandmod, and this copy under another Python or numba, keep theirs, and so do
     folders without such a stamp (still compiling, or from before stamps named their setting).
@@ -94,12 +98,15 @@ def _forget_earlier_versions(setting: str) -> None:
     here = kernel_cache_dir()
     if here != _versions() / version_hash():
         return
+    earlier = []
     for other in here.parent.iterdir():
         if other == here or not other.is_dir():
             continue
+        stamp = other / f"compiled-{other.name}"
         try:
-            earlier = (other / f"compiled-{other.name}").read_text(encoding="utf-8") == setting
+            if stamp.read_text(encoding="utf-8") == setting:
+                earlier.append((stamp.stat().st_mtime, other))
         except (OSError, UnicodeDecodeError):
             continue
-        if earlier:
-            shutil.rmtree(other, ignore_errors=True)
+    for _, other in sorted(earlier, reverse=True)[KEPT_VERSIONS:]:
+        shutil.rmtree(other, ignore_errors=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import os
 import shutil
 from pathlib import Path
 
@@ -45,15 +46,18 @@ def test_kernels_are_kept_in_a_folder_of_their_version_unless_numba_is_told_wher
     assert kernelcache.kernel_cache_dir() == tmp_path / "mine"
 
 
-def test_compiling_removes_the_kernels_of_this_copys_earlier_versions_only(tmp_path, monkeypatch):
+def test_compiling_removes_the_kernels_of_this_copys_older_versions_only(tmp_path, monkeypatch):
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     versions = tmp_path / "sandmod" / "numba"
     current = kernelcache.version_hash()
-    with monkeypatch.context() as before_an_edit:
-        before_an_edit.setattr(kernelcache, "version_hash", lambda folder=kernelcache.SOURCES: "0" * 16)
-        kernelcache.mark_compiled()
-        (versions / ("0" * 16) / "kernel.step.nbi").write_bytes(b"compiled code")
+    earlier = ["0" * 16, "4" * 16, "5" * 16]  # compiled in this order, before edits
+    for age, version in enumerate(earlier):
+        with monkeypatch.context() as before_an_edit:
+            before_an_edit.setattr(kernelcache, "version_hash", lambda folder=kernelcache.SOURCES: version)
+            kernelcache.mark_compiled()
+        (versions / version / "kernel.step.nbi").write_bytes(b"compiled code")
+        os.utime(versions / version / f"compiled-{version}", (1_000_000 + age, 1_000_000 + age))
     other_copy = versions / ("1" * 16)  # another checkout, or this one under another numba
     other_copy.mkdir()
     (other_copy / f"compiled-{'1' * 16}").write_text("(3, 11) 0.1.0 /elsewhere/core", encoding="utf-8")
@@ -65,8 +69,9 @@ def test_compiling_removes_the_kernels_of_this_copys_earlier_versions_only(tmp_p
 
     kernelcache.mark_compiled()
 
-    assert kernelcache.is_compiled()
-    assert sorted(p.name for p in versions.iterdir()) == sorted([current, "1" * 16, "2" * 16, "3" * 16])
+    assert kernelcache.is_compiled() and kernelcache.KEPT_VERSIONS == 2
+    kept = [current, "1" * 16, "2" * 16, "3" * 16, "4" * 16, "5" * 16]  # the oldest of this copy's went
+    assert sorted(p.name for p in versions.iterdir()) == sorted(kept)
 
 
 def test_a_cache_folder_numba_was_told_to_use_is_left_as_it_is(tmp_path, monkeypatch):
