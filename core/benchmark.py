@@ -113,6 +113,44 @@ SCENES: dict[str, Callable[[World, Ruleset], None]] = {
 
 
 @dataclass(frozen=True)
+class Bench:
+    """What a bench run steps: a built-in scene at a size, or a world file; ``make`` builds it afresh."""
+
+    name: str  # the scene's name, or the world file as given
+    width: int
+    height: int
+    steps: int  # how many to time unless told: 1000 for a scene, a world's own frames
+    make: Callable[[], World]
+
+
+def scene_bench(ruleset: Ruleset, scene: str, size: int, seed: int = 0) -> Bench:
+    """The built-in ``scene`` in a size x size world of ``ruleset``."""
+
+    def make() -> World:
+        world = World(ruleset, size, size, seed)
+        SCENES[scene](world, ruleset)
+        return world
+
+    return Bench(scene, size, size, 1000, make)
+
+
+def world_bench(path: Path, *, mod_dirs: Sequence[Path] = (), seed: int | None = None) -> tuple[Bench, list[str]]:
+    """A world file, as ``sandmod render`` would start it (its mods, scene, emitters and
+    timeline), and the warnings about its mods. Raises ProblemsError for a bad file."""
+    from .errors import display_path
+    from .loading import load_world
+    from .scene import build_world
+
+    loaded = load_world(path, mod_dirs=mod_dirs, seed=seed)
+
+    def make() -> World:
+        return build_world(loaded.spec, loaded.ruleset, loaded.source, seed)
+
+    info = loaded.spec.world
+    return Bench(display_path(path), info.width, info.height, loaded.spec.render.frames, make), [str(w) for w in loaded.warnings]
+
+
+@dataclass(frozen=True)
 class BenchResult:
     """One timed run; the JSON that ``sandmod bench --json`` prints."""
 
@@ -146,15 +184,12 @@ def state_bytes(world: World) -> int:
     return sum(a.nbytes for a in world.state) + sum((a if a.base is None else a.base).nbytes for a in chunks)
 
 
-def run(
-    ruleset: Ruleset, scene: str, size: int, steps: int, threads: int, *, sleep: bool = True, seed: int = 0, compile_seconds: float = 0.0
-) -> BenchResult:
-    """Build ``scene`` in a size x size world and time ``steps`` steps on ``threads`` threads."""
+def run(bench: Bench, steps: int, threads: int, *, sleep: bool = True, compile_seconds: float = 0.0) -> BenchResult:
+    """Build ``bench``'s world and time ``steps`` steps on ``threads`` threads."""
     import numba
 
     numba.set_num_threads(threads)
-    world = World(ruleset, size, size, seed)
-    SCENES[scene](world, ruleset)
+    world = bench.make()
     awake = 0.0
     started = time.perf_counter()
     for _ in range(steps):
@@ -164,19 +199,19 @@ def run(
         world.step()
     seconds = time.perf_counter() - started
     return BenchResult(
-        scene=scene,
-        width=size,
-        height=size,
+        scene=bench.name,
+        width=world.width,
+        height=world.height,
         steps=steps,
         threads=threads,
         sleep=sleep,
         seconds=round(seconds, 4),
         steps_per_second=round(steps / seconds, 2),
-        mcell_updates_per_second=round(size * size * steps / seconds / 1e6, 1),
+        mcell_updates_per_second=round(world.width * world.height * steps / seconds / 1e6, 1),
         awake_fraction=round(awake / steps, 4),
         compile_seconds=round(compile_seconds, 3),
         peak_memory_mb=round(peak_memory_mb(), 1),
-        state_bytes_per_cell=round(state_bytes(world) / (size * size), 4),
+        state_bytes_per_cell=round(state_bytes(world) / (world.width * world.height), 4),
     )
 
 
@@ -289,9 +324,7 @@ def _restore(world: World, saved: list[np.ndarray], frame: int) -> None:
 
 
 def compare(
-    ruleset: Ruleset,
-    scene: str,
-    size: int,
+    bench: Bench,
     steps: int,
     threads: int | Sequence[int],
     kernels: Sequence,
@@ -299,7 +332,7 @@ def compare(
     segment: int = 25,
     repeats: int = 3,
 ) -> list[float]:
-    """Seconds each kernel module takes to step ``scene`` for ``steps`` steps, on the same frames.
+    """Seconds each kernel module takes to step ``bench``'s world for ``steps`` steps, on the same frames.
 
     ``threads`` is one count for all, or one per kernel: the same kernel
     listed twice with two counts times them against each other.
@@ -316,8 +349,7 @@ def compare(
     import numba
 
     counts = [threads] * len(kernels) if isinstance(threads, int) else list(threads)
-    world = World(ruleset, size, size)
-    SCENES[scene](world, ruleset)
+    world = bench.make()
     for kernel, count in zip(kernels, counts):  # compile, or load from the cache, before timing
         start, frame = _saved(world), world.frame
         numba.set_num_threads(count)
@@ -363,9 +395,9 @@ class Yardstick(Turns):
 
 
 def against_yardstick(
-    ruleset: Ruleset, scene: str, size: int, steps: int, threads: Sequence[int], *, segment: int = 25, repeats: int = 3
+    bench: Bench, steps: int, threads: Sequence[int], *, segment: int = 25, repeats: int = 3
 ) -> tuple[list[float], list[float]]:
-    """Seconds this kernel and the yardstick take to step ``scene`` ``steps`` steps, on each count of ``threads``.
+    """Seconds this kernel and the yardstick take to step ``bench``'s world ``steps`` steps, on each count of ``threads``.
 
     Both start from the scene's cells and step by their own rules; all of
     them take turns over stretches of ``segment`` steps, each stretch
@@ -378,8 +410,8 @@ def against_yardstick(
     from . import yardstick
     from .hashing import SALT_MOVE, frame_key
 
-    world = World(ruleset, size, size)
-    SCENES[scene](world, ruleset)
+    world = bench.make()
+    ruleset = world.ruleset
     cells = [world.cells.copy() for _ in threads]  # the yardstick's bands differ by count, and so do its frames
     moved = np.zeros(world.cells.shape, np.uint8)
     sand, water = ruleset.index("sand"), ruleset.index("water")
@@ -438,19 +470,18 @@ class RecordResult:
         return asdict(self)
 
 
-def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threads: int, folder) -> RecordResult:
-    """Render ``images`` steps of ``scene`` with ``recorder`` into ``folder``, timing each part."""
+def record(bench: Bench, recorder, images: int, threads: int, folder) -> RecordResult:
+    """Render ``images`` steps of ``bench``'s world with ``recorder`` into ``folder``, timing each part."""
     import numba
 
     from .recording import VideoSettings, output_bytes
 
     numba.set_num_threads(threads)
-    world = World(ruleset, size, size)
-    SCENES[scene](world, ruleset)
+    world = bench.make()
     output = Path(folder) / f"bench-{recorder.name}{recorder.extensions[0] if recorder.extensions else ''}"
     if recorder.folder:
         output.mkdir()
-    out = recorder.open(output, VideoSettings(size, size, ruleset.palette, 25))
+    out = recorder.open(output, VideoSettings(world.width, world.height, world.ruleset.palette, 25))
     step = image = encode = 0.0
     for _ in range(images):
         t0 = time.perf_counter()
@@ -466,9 +497,9 @@ def record(ruleset: Ruleset, recorder, scene: str, size: int, images: int, threa
     written = output_bytes(output)
     return RecordResult(
         format=recorder.name,
-        scene=scene,
-        width=size,
-        height=size,
+        scene=bench.name,
+        width=world.width,
+        height=world.height,
         images=images,
         threads=threads,
         step_seconds=round(step, 4),

@@ -59,13 +59,82 @@ def test_bench_in_turns_times_thread_counts_on_the_same_frames():
     assert result.exit_code == 2 and "--against, --in-turns and --yardstick do not go together: give one" in result.output
 
 
+POURING = """
+[world]
+width = 64
+height = 48
+seed = 3
+
+[[emitters]]
+shape = "rect"
+element = "sand"
+x = 30
+y = 2
+width = 4
+height = 2
+
+[render]
+frames = 7
+"""
+
+
+def test_bench_times_a_world_file_at_its_own_size_for_its_own_frames(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    Path("pouring.toml").write_text(POURING)
+    args = ["bench", "--world", "pouring.toml", "--scene", "mix", "--size", "256", "--threads", "1", "--json"]
+    result = CliRunner().invoke(cli, [*args, "--steps", "4"], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    runs = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [(r["scene"], r["width"], r["height"], r["steps"]) for r in runs] == [("mix", 256, 256, 4), ("pouring.toml", 64, 48, 4)]
+    result = CliRunner().invoke(cli, ["bench", "--world", "pouring.toml", "--threads", "1", "--json"], catch_exceptions=False)
+    (run,) = [json.loads(line) for line in result.stdout.splitlines()]
+    assert KEYS <= set(run) and run["steps"] == 7 and run["awake_fraction"] > 0
+
+
+def test_a_world_bench_builds_the_file_afresh_and_runs_its_emitters(ruleset, tmp_path):
+    path = tmp_path / "pouring.toml"
+    path.write_text(POURING)
+    bench, warnings = benchmark.world_bench(path)
+    first, second = bench.make(), bench.make()
+    assert first is not second and warnings == [] and first.seed == 3
+    for _ in range(5):
+        first.step()
+    assert first.counts().get("sand:sand", 0) > 0 and second.counts().get("sand:sand", 0) == 0
+    assert benchmark.world_bench(path, seed=9)[0].make().seed == 9
+
+
+def test_bench_steps_a_world_alike_on_any_thread_count():
+    """Emitters, sprays and the timeline run by the frame number, so stretches timed again from a saved state repeat."""
+    threads = min(2, numba.config.NUMBA_NUM_THREADS)
+    args = ["bench", "--world", str(EXAMPLES / "fountain.toml"), "--steps", "30", "--threads", "1", "--threads", str(threads)]
+    result = CliRunner().invoke(cli, [*args, "--in-turns"], catch_exceptions=False)
+    assert result.exit_code == 0 and result.stdout.strip().endswith("same frames"), result.output
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--world", "bad.toml"], "bad.toml:3:1: world.width: must be >= 4 (got 1)"),
+        (["--world", "nosuch.toml"], "nosuch.toml: cannot read file"),
+        (["--world", "pouring.toml", "--size", "256"], "--size sizes the built-in scenes; a world file has its own size"),
+        (["--world", "pouring.toml", "--yardstick"], "--yardstick runs on the built-in scenes"),
+    ],
+)
+def test_bench_says_what_is_wrong_with_a_world(tmp_path, monkeypatch, args, message):
+    monkeypatch.chdir(tmp_path)
+    Path("pouring.toml").write_text(POURING)
+    Path("bad.toml").write_text(POURING.replace("width = 64", "width = 1"))
+    result = CliRunner().invoke(cli, ["bench", *args])
+    assert result.exit_code == 2 and message in result.output and "Traceback" not in result.output
+
+
 def test_bench_rejects_sizes_out_of_range():
     result = CliRunner().invoke(cli, ["bench", "--size", "100"])
     assert result.exit_code == 2 and "256<=x<=2048" in result.output
 
 
 def test_no_sleep_updates_every_chunk(ruleset):
-    kept = benchmark.run(ruleset, "settled", 256, 2, 1, sleep=False)
+    kept = benchmark.run(benchmark.scene_bench(ruleset, "settled", 256), 2, 1, sleep=False)
     assert kept.awake_fraction == 1.0 and not kept.sleep
 
 
@@ -155,7 +224,7 @@ class _Meddler:
 def test_compare_times_kernels_that_step_to_the_same_frames(ruleset):
     from sandmod import kernel
 
-    seconds = benchmark.compare(ruleset, "everything", 64, 30, 1, [kernel, benchmark.load_kernel(Path(kernel.__file__))], segment=8)
+    seconds = benchmark.compare(benchmark.scene_bench(ruleset, "everything", 64), 30, 1, [kernel, benchmark.load_kernel(Path(kernel.__file__))], segment=8)
     assert len(seconds) == 2 and min(seconds) > 0
 
 
@@ -171,7 +240,7 @@ def test_compare_finds_the_stretch_where_frames_part(ruleset):
     from sandmod import kernel
 
     with pytest.raises(benchmark.FramesDiffer) as differ:
-        benchmark.compare(ruleset, "mix", 64, 40, 1, [kernel, _Meddler(frame=17)], segment=8, repeats=2)
+        benchmark.compare(benchmark.scene_bench(ruleset, "mix", 64), 40, 1, [kernel, _Meddler(frame=17)], segment=8, repeats=2)
     assert differ.value.frame == 24  # the end of the stretch of frames 16..23
 
 

@@ -505,13 +505,15 @@ def test_(mods, mod_dirs) -> None:
 
 
 @cli.command()
-@click.option("--scene", "scenes", multiple=True, default=["mix"], show_default=True,
-              type=click.Choice(["mix", "halves", "everything", "settled", "patch"]), help="Scene to run (repeatable).")
-@click.option("--size", type=click.IntRange(256, 2048), default=512, show_default=True, help="World width and height in cells.")
-@click.option("--steps", type=click.IntRange(1, 100000), default=1000, show_default=True, help="Steps to time.")
+@click.option("--scene", "scenes", multiple=True,
+              type=click.Choice(["mix", "halves", "everything", "settled", "patch"]), help="Scene to run (repeatable; default: mix).")
+@click.option("--world", "worlds", multiple=True, type=click.Path(dir_okay=False, path_type=Path), metavar="WORLD.toml",
+              help="A world file to time, as render starts it (repeatable).")
+@click.option("--size", type=click.IntRange(256, 2048), help="The scenes' width and height in cells.  [default: 512]")
+@click.option("--steps", type=click.IntRange(1, 100000), help="Steps to time.  [default: 1000; a world's own frames]")
 @click.option("--threads", "thread_counts", multiple=True, type=click.IntRange(1, 256), help="Threads (repeatable; default: all CPUs).")
 @click.option("--no-sleep", is_flag=True, help="Update every chunk every step, as if none could sleep.")
-@click.option("--seed", type=click.IntRange(0, 2**32 - 1), default=0, show_default=True, help="World seed.")
+@click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed.  [default: 0; a world's own]")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per run.")
 @click.option("--record", "formats", multiple=True, metavar="FORMAT",
               help="Time rendering instead: an image a step, recorded as FORMAT (repeatable: gif, apng, webp, png-frames).")
@@ -519,8 +521,9 @@ def test_(mods, mod_dirs) -> None:
               help="Compare with another version of the kernel on the same frames (e.g. from git show REV:core/kernel.py).")
 @click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
 @click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
-def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, in_turns, yardstick) -> None:
-    """Time the kernel on a built-in scene: steps/s, million cell-updates/s, chunks awake, memory.
+@_mods_option
+def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, in_turns, yardstick, mod_dirs) -> None:
+    """Time the kernel on a built-in scene or a world file: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
     Scenes (y = 0 is the top row; edges are closed):
@@ -529,6 +532,10 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
       everything  twelve elements: reactions, lifetimes, heat, fire, blasts
       settled     layers of sand and water at rest (compare with --no-sleep)
       patch       mix in a 512x512 stone box in the middle, the rest empty
+
+    A --world runs as render runs it (its mods, scene, emitters, sprays and
+    timeline), at its own size and seed, for its own number of frames
+    unless --steps says otherwise; --mods adds mod folders for it.
 
     With --record, each step also makes an image and a recorder encodes it:
     prints images encoded a second and encoding's share of the render.
@@ -547,12 +554,18 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
     (no velocity, heat, reactions or sleeping chunks; on several threads,
     each steps its own band of columns). It shows what this machine allows
     at the time, the kernel's speed as a share of it, and what more
-    threads give each of them.
+    threads give each of them. It runs on the scenes only.
     """
     import os
 
     from sandmod import benchmark, kernelcache
 
+    if size is not None and worlds and not scenes:
+        raise click.UsageError("--size sizes the built-in scenes; a world file has its own size")
+    if sum(map(bool, (against, in_turns, yardstick))) > 1:
+        raise click.UsageError("--against, --in-turns and --yardstick do not go together: give one")
+    if yardstick and worlds:
+        raise click.UsageError("--yardstick runs on the built-in scenes (its rules know sand and water only), not on a --world")
     thread_counts = thread_counts or (benchmark.max_threads(),)
     if max(thread_counts) > benchmark.max_threads():
         os.environ["NUMBA_NUM_THREADS"] = str(max(thread_counts))  # read when numba is imported, just below
@@ -563,36 +576,45 @@ def bench(scenes, size, steps, thread_counts, no_sleep, seed, as_json, formats, 
 
     if max(thread_counts) > numba.config.NUMBA_NUM_THREADS:  # numba was imported before us, with fewer
         raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
+    benches = []
+    for path in worlds:  # every file checked before anything is timed
+        world_bench, warnings = benchmark.world_bench(path, mod_dirs=mod_dirs, seed=seed)
+        for warning in warnings:
+            click.echo(f"warning: {warning}", err=True)
+        benches.append(world_bench)
     ruleset = load_ruleset()
+    if scenes or not worlds:
+        benches[:0] = [benchmark.scene_bench(ruleset, scene, size or 512, seed or 0) for scene in scenes or ("mix",)]
     if not kernelcache.is_compiled():
         _say(kernelcache.NOTICE)
     compile_seconds = compile_kernels(ruleset)
+    runs = [(b, steps or b.steps) for b in benches]
     if formats:
-        _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json)
-        return
-    if sum(map(bool, (against, in_turns, yardstick))) > 1:
-        raise click.UsageError("--against, --in-turns and --yardstick do not go together: give one")
-    if against:
-        _bench_against(ruleset, against, scenes, size, steps, thread_counts, as_json)
-        return
-    if in_turns:
-        _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json)
-        return
-    if yardstick:
-        _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json)
-        return
-    for scene in scenes:
-        for threads in thread_counts:
-            result = benchmark.run(ruleset, scene, size, steps, threads, sleep=not no_sleep, seed=seed, compile_seconds=compile_seconds)
-            _report(
-                result,
-                as_json,
-                f"{scene} {size}x{size}, {steps} steps, {_threads(threads)}"
-                f"{', no sleeping' if no_sleep else ''}: {result.steps_per_second:.1f} steps/s, "
-                f"{result.mcell_updates_per_second:.1f} million cell-updates/s, {result.awake_fraction:.0%} of chunks awake, "
-                f"compile {result.compile_seconds:.1f} s, peak memory {result.peak_memory_mb:.0f} MB, "
-                f"state {result.state_bytes_per_cell:.2f} bytes/cell",
-            )
+        _bench_recording(formats, runs, thread_counts, as_json)
+    elif against:
+        _bench_against(against, runs, thread_counts, as_json)
+    elif in_turns:
+        _bench_in_turns(runs, thread_counts, as_json)
+    elif yardstick:
+        _bench_yardstick(runs, thread_counts, as_json)
+    else:
+        for b, count in runs:
+            for threads in thread_counts:
+                result = benchmark.run(b, count, threads, sleep=not no_sleep, compile_seconds=compile_seconds)
+                _report(
+                    result,
+                    as_json,
+                    f"{_what(b, count)}, {_threads(threads)}"
+                    f"{', no sleeping' if no_sleep else ''}: {result.steps_per_second:.1f} steps/s, "
+                    f"{result.mcell_updates_per_second:.1f} million cell-updates/s, {result.awake_fraction:.0%} of chunks awake, "
+                    f"compile {result.compile_seconds:.1f} s, peak memory {result.peak_memory_mb:.0f} MB, "
+                    f"state {result.state_bytes_per_cell:.2f} bytes/cell",
+                )
+
+
+def _what(bench, steps: int, unit: str = "steps") -> str:
+    """A bench run's scene or world, its size and length, for people."""
+    return f"{bench.name} {bench.width}x{bench.height}, {steps} {unit}"
 
 
 def _threads(count: int) -> str:
@@ -604,7 +626,7 @@ def _report(result, as_json: bool, line: str) -> None:
     click.echo(json.dumps(result.as_dict()) if as_json else line)
 
 
-def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -> None:
+def _bench_against(path, runs, thread_counts, as_json) -> None:
     from numba.core.errors import NumbaError
 
     from sandmod import benchmark, kernel
@@ -613,41 +635,41 @@ def _bench_against(ruleset, path, scenes, size, steps, thread_counts, as_json) -
         other = benchmark.load_kernel(path)
     except ValueError as error:
         raise click.BadParameter(str(error), param_hint="'--against'") from None
-    cells = size * size * steps / 1e6
-    for scene in scenes:
+    for b, steps in runs:
+        cells = b.width * b.height * steps / 1e6
         for threads in thread_counts:
             try:
-                ours, theirs = benchmark.compare(ruleset, scene, size, steps, threads, [kernel, other])
+                ours, theirs = benchmark.compare(b, steps, threads, [kernel, other])
             except benchmark.FramesDiffer as differ:
-                click.echo(f"error: {scene}: {path} steps to other frames than this kernel (by frame {differ.frame})", err=True)
+                click.echo(f"error: {b.name}: {path} steps to other frames than this kernel (by frame {differ.frame})", err=True)
                 sys.exit(1)
             except NumbaError as error:  # it imports, but its code does not fit this sandmod's arrays
                 first = str(error).strip().splitlines()[0]
                 raise click.BadParameter(f"{path}: does not compile beside this sandmod ({type(error).__name__}: {first})", param_hint="'--against'") from None
             result = benchmark.Comparison(
-                scene, size, size, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3)
+                b.name, b.width, b.height, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3)
             )
             _report(
                 result,
                 as_json,
-                f"{scene} {size}x{size}, {steps} steps, {_threads(threads)}: "
+                f"{_what(b, steps)}, {_threads(threads)}: "
                 f"this kernel {result.mcell_updates_per_second:.1f} million cell-updates/s, {path} "
                 f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, same frames",
             )
 
 
-def _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json) -> None:
+def _bench_in_turns(runs, thread_counts, as_json) -> None:
     from sandmod import benchmark, kernel
 
-    cells = size * size * steps / 1e6
-    for scene in scenes:
+    for b, steps in runs:
+        cells = b.width * b.height * steps / 1e6
         try:
-            seconds = benchmark.compare(ruleset, scene, size, steps, thread_counts, [kernel] * len(thread_counts))
+            seconds = benchmark.compare(b, steps, thread_counts, [kernel] * len(thread_counts))
         except benchmark.FramesDiffer as differ:  # a bug in the kernel: threads must never change the frames
-            click.echo(f"error: {scene}: {_threads(thread_counts[0])} and more step to other frames (by frame {differ.frame})", err=True)
+            click.echo(f"error: {b.name}: {_threads(thread_counts[0])} and more step to other frames (by frame {differ.frame})", err=True)
             sys.exit(1)
         results = [
-            benchmark.Turns(scene, size, size, steps, threads, round(cells / took, 1), round(seconds[0] / took, 3), thread_counts[0])
+            benchmark.Turns(b.name, b.width, b.height, steps, threads, round(cells / took, 1), round(seconds[0] / took, 3), thread_counts[0])
             for threads, took in zip(thread_counts, seconds)
         ]
         if as_json:
@@ -655,18 +677,18 @@ def _bench_in_turns(ruleset, scenes, size, steps, thread_counts, as_json) -> Non
                 click.echo(json.dumps(result.as_dict()))
         else:
             speeds = [f"{_threads(r.threads)} {r.mcell_updates_per_second:.1f}" + (f" ({r.speedup:.2f}x)" if i else "") for i, r in enumerate(results)]
-            click.echo(f"{scene} {size}x{size}, {steps} steps, in turns: {', '.join(speeds)} million cell-updates/s, same frames")
+            click.echo(f"{_what(b, steps)}, in turns: {', '.join(speeds)} million cell-updates/s, same frames")
 
 
-def _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json) -> None:
+def _bench_yardstick(runs, thread_counts, as_json) -> None:
     from sandmod import benchmark
 
-    cells = size * size * steps / 1e6
-    for scene in scenes:
-        ours, theirs = benchmark.against_yardstick(ruleset, scene, size, steps, thread_counts)
+    for b, steps in runs:
+        cells = b.width * b.height * steps / 1e6
+        ours, theirs = benchmark.against_yardstick(b, steps, thread_counts)
         results = [
             benchmark.Yardstick(
-                scene, size, size, steps, threads, round(cells / mine, 1), round(ours[0] / mine, 3), thread_counts[0],
+                b.name, b.width, b.height, steps, threads, round(cells / mine, 1), round(ours[0] / mine, 3), thread_counts[0],
                 yardstick_mcell_updates_per_second=round(cells / its, 1),
                 over_yardstick=round(its / mine, 3),
                 yardstick_speedup=round(theirs[0] / its, 3),
@@ -683,10 +705,10 @@ def _bench_yardstick(ruleset, scenes, size, steps, thread_counts, as_json) -> No
             for r in results
         ]
         parts += [f"{r.threads} over {r.over_threads}: this kernel {r.speedup:.2f}x, the yardstick {r.yardstick_speedup:.2f}x" for r in results[1:]]
-        click.echo(f"{scene} {size}x{size}, {steps} steps, in turns, million cell-updates/s: {'; '.join(parts)}")
+        click.echo(f"{_what(b, steps)}, in turns, million cell-updates/s: {'; '.join(parts)}")
 
 
-def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_json) -> None:
+def _bench_recording(formats, runs, thread_counts, as_json) -> None:
     import tempfile
 
     from sandmod import benchmark
@@ -696,15 +718,15 @@ def _bench_recording(ruleset, formats, scenes, size, steps, thread_counts, as_js
     unknown = [name for name in formats if name not in registry.recorders]
     if unknown:
         raise click.BadParameter(f"unknown format {unknown[0]!r} (known: {registry.recorder_choices()})", param_hint="'--record'")
-    for scene in scenes:
+    for b, steps in runs:
         for threads in thread_counts:
             for name in formats:
                 with tempfile.TemporaryDirectory() as folder:
-                    result = benchmark.record(ruleset, registry.recorders[name].value, scene, size, steps, threads, folder)
+                    result = benchmark.record(b, registry.recorders[name].value, steps, threads, folder)
                 _report(
                     result,
                     as_json,
-                    f"{name} {scene} {size}x{size}, {steps} images, {_threads(threads)}: "
+                    f"{name} {_what(b, steps, 'images')}, {_threads(threads)}: "
                     f"encoding {result.images_per_second:.0f} images/s ({result.encode_share:.0%} of the render), "
                     f"images {steps / result.image_seconds:.0f}/s, steps {steps / result.step_seconds:.0f}/s, {result.file_mb:.2f} MB",
                 )
