@@ -578,10 +578,10 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
         raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
     benches = []
     for path in worlds:  # every file checked before anything is timed
-        world_bench, warnings = benchmark.world_bench(path, mod_dirs=mod_dirs, seed=seed)
+        timed, warnings = benchmark.world_bench(path, mod_dirs=mod_dirs, seed=seed)
         for warning in warnings:
             click.echo(f"warning: {warning}", err=True)
-        benches.append(world_bench)
+        benches.append(timed)
     ruleset = load_ruleset()
     if scenes or not worlds:
         benches[:0] = [benchmark.scene_bench(ruleset, scene, size or 512, seed or 0) for scene in scenes or ("mix",)]
