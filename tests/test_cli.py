@@ -88,6 +88,23 @@ def test_same_seed_renders_the_same_file_twice():
     assert Path("a.gif").read_bytes() == Path("b.gif").read_bytes()
 
 
+def test_render_threads_change_nothing_but_speed():
+    import numba
+
+    before = numba.get_num_threads()
+    try:
+        for count in (1, min(2, numba.config.NUMBA_NUM_THREADS)):
+            world = str(EXAMPLES / "forest_fire.toml")  # eight tiles, burning across its width
+            result = invoke("render", world, "-o", f"{count}.gif", "--frames", "60", "--scale", "1", "--threads", str(count))
+            assert result.exit_code == 0, result.output
+            assert numba.get_num_threads() == count
+    finally:
+        numba.set_num_threads(before)
+    assert Path("1.gif").read_bytes() == Path(f"{min(2, numba.config.NUMBA_NUM_THREADS)}.gif").read_bytes()
+    result = invoke("render", world, "--threads", str(numba.config.NUMBA_NUM_THREADS + 1))
+    assert result.exit_code == 2 and f"at most {numba.config.NUMBA_NUM_THREADS} in this process" in result.output
+
+
 @pytest.mark.parametrize("name", sorted(p.stem for p in EXAMPLES.glob("*.toml")))
 def test_each_example_world_renders(name):
     result = invoke("render", str(EXAMPLES / f"{name}.toml"), "-o", f"{name}.gif", "--frames", "40", "--scale", "1")

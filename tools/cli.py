@@ -67,10 +67,13 @@ _mods_option = click.option(
 @click.option("--still", type=click.Path(dir_okay=False, path_type=Path), help="Also write the last image as a PNG.")
 @click.option("--save-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Save the final state to an .npz file.")
 @click.option("--from-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Start from a saved state (and its frame and seed).")
+@click.option("--threads", type=click.IntRange(1, 256), help="Threads to step the world on (default: all CPUs); the frames are the same on any number.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 @_mods_option
-def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, quiet, mod_dirs) -> None:
+def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, threads, quiet, mod_dirs) -> None:
     """Simulate WORLD (a world .toml file) and write an animation."""
+    if threads is not None:
+        _use_threads(threads)
     from sandmod.loading import load_world
     from sandmod.recording import output_bytes
     from sandmod.render import Framing
@@ -118,6 +121,19 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
             f"wrote {display_path(output)}: {result.images} images of {result.width}x{result.height} "
             f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({output_bytes(output) / 1e6:.2f} MB){extras}"
         )
+
+
+def _use_threads(count: int) -> None:
+    """Step worlds on ``count`` threads in this process (more than the CPUs only if asked before numba starts)."""
+    import os
+
+    if "numba" not in sys.modules:
+        os.environ["NUMBA_NUM_THREADS"] = str(count)  # the pool's size, read when numba is imported
+    import numba
+
+    if count > numba.config.NUMBA_NUM_THREADS:
+        raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
+    numba.set_num_threads(count)
 
 
 @contextlib.contextmanager
