@@ -73,7 +73,10 @@ _mods_option = click.option(
 def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, threads, quiet, mod_dirs) -> None:
     """Simulate WORLD (a world .toml file) and write an animation."""
     if threads is not None:
-        _use_threads(threads)
+        _thread_pool(threads)
+        import numba
+
+        numba.set_num_threads(threads)
     from sandmod.loading import load_world
     from sandmod.recording import output_bytes
     from sandmod.render import Framing
@@ -123,17 +126,19 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
         )
 
 
-def _use_threads(count: int) -> None:
-    """Step worlds on ``count`` threads in this process (more than the CPUs only if asked before numba starts)."""
+def _thread_pool(most: int) -> None:
+    """Let this process step worlds on up to ``most`` threads: numba's pool is sized when numba is
+    imported, so a larger one than the CPUs is asked for first; one sized already is a usage error."""
     import os
 
-    if "numba" not in sys.modules:
-        os.environ["NUMBA_NUM_THREADS"] = str(count)  # the pool's size, read when numba is imported
+    from sandmod.benchmark import max_threads
+
+    if most > max_threads() and "numba" not in sys.modules:
+        os.environ["NUMBA_NUM_THREADS"] = str(most)  # read when numba is imported, just below
     import numba
 
-    if count > numba.config.NUMBA_NUM_THREADS:
+    if most > numba.config.NUMBA_NUM_THREADS:  # numba was imported before us, with fewer
         raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
-    numba.set_num_threads(count)
 
 
 @contextlib.contextmanager
@@ -572,8 +577,6 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
     at the time, the kernel's speed as a share of it, and what more
     threads give each of them. It runs on the scenes only.
     """
-    import os
-
     from sandmod import benchmark, kernelcache
 
     if size is not None and worlds and not scenes:
@@ -583,15 +586,10 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
     if yardstick and worlds:
         raise click.UsageError("--yardstick runs on the built-in scenes (its rules know sand and water only), not on a --world")
     thread_counts = thread_counts or (benchmark.max_threads(),)
-    if max(thread_counts) > benchmark.max_threads():
-        os.environ["NUMBA_NUM_THREADS"] = str(max(thread_counts))  # read when numba is imported, just below
-    import numba
-
+    _thread_pool(max(thread_counts))
     from sandmod.loading import load_ruleset
     from sandmod.world import compile_kernels
 
-    if max(thread_counts) > numba.config.NUMBA_NUM_THREADS:  # numba was imported before us, with fewer
-        raise click.BadParameter(f"at most {numba.config.NUMBA_NUM_THREADS} in this process", param_hint="'--threads'")
     benches = []
     for path in worlds:  # every file checked before anything is timed
         timed, warnings = benchmark.world_bench(path, mod_dirs=mod_dirs, seed=seed)
