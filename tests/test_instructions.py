@@ -53,3 +53,12 @@ def test_a_bad_world_file_is_one_line_per_problem_and_exit_2(tmp_path: Path):
     assert result.exit_code == 2
     assert "world.width: must be >= 4" in result.output
     assert "Traceback" not in result.output
+
+
+def test_against_a_file_that_is_no_kernel_is_a_usage_error_before_any_count(tmp_path: Path):
+    other = tmp_path / "other.py"
+    other.write_text("x = 1\n", encoding="utf-8")
+    result = CliRunner().invoke(instructions.main, ["--against", str(other)])
+    assert result.exit_code == 2
+    assert result.output.splitlines()[-1].endswith("not a sandmod kernel (no step, take_detonations, explode)")
+    assert "counted by callgrind" not in result.output

@@ -104,7 +104,7 @@ def count(what: dict, kernel: str | None, folder: Path) -> Count:
     child = [sys.executable, "-m", "sandmod.tools.instructions", "--child", job]
     native = subprocess.run(child, env=env, capture_output=True, text=True)  # compiles, unless cached
     if native.returncode != 0:
-        raise CannotCount(f"the frames did not run: {native.stderr.strip().splitlines()[-1:]}")
+        raise CannotCount(f"the frames did not run: {_last_line(native.stderr)}")
     out = folder / "callgrind.out"
     counted = subprocess.run(
         ["valgrind", "--tool=callgrind", "--instr-atstart=no", "--cache-sim=no", "--branch-sim=yes", f"--callgrind-out-file={out}", *child],
@@ -113,7 +113,7 @@ def count(what: dict, kernel: str | None, folder: Path) -> Count:
         text=True,
     )
     if counted.returncode != 0:
-        raise CannotCount(f"valgrind failed: {counted.stderr.strip().splitlines()[-1:]}")
+        raise CannotCount(f"valgrind failed: {_last_line(counted.stderr)}")
     totals = [line for dump in folder.glob("callgrind.out*") for line in dump.read_text().splitlines() if line.startswith("totals:")]
     totals = [t for t in totals if t.split()[1:] != ["0"]]
     if len(totals) != 1:
@@ -121,6 +121,11 @@ def count(what: dict, kernel: str | None, folder: Path) -> Count:
     for dump in folder.glob("callgrind.out*"):
         dump.unlink()
     return Count.from_totals(totals[0], counted.stdout.strip().splitlines()[-1])
+
+
+def _last_line(text: str) -> str:
+    lines = text.strip().splitlines()
+    return lines[-1] if lines else "no message"
 
 
 def _child(job: dict) -> None:
@@ -186,7 +191,15 @@ def main(scene, world, size, start, frames, against, child) -> None:
         name, cells = world, bench.width * bench.height
     else:
         name, cells = f"{scene} {size}x{size}", size * size
-    click.echo(f"{name}, frames {start + 1}-{start + frames}, one thread, counted by callgrind:")
+    if against:
+        from sandmod import benchmark
+
+        try:
+            benchmark.load_kernel(against)  # before counting anything: is it a kernel at all?
+        except ValueError as error:
+            raise click.BadParameter(str(error), param_hint="'--against'") from None
+    span = f"frames {start + 1}-{start + frames}" if frames > 1 else f"frame {start + 1}"
+    click.echo(f"{name}, {span}, one thread, counted by callgrind:")
     try:
         with tempfile.TemporaryDirectory(prefix="sandmod-count-") as scratch:
             folder = Path(scratch)
