@@ -34,6 +34,8 @@ from pathlib import Path
 
 import click
 
+from sandmod import benchmark  # numpy, not numba
+
 #: The two calls, through valgrind's client requests (no-ops when not under valgrind).
 _SWITCH_C = """
 #include <valgrind/callgrind.h>
@@ -95,11 +97,15 @@ def _switch_library(folder: Path) -> Path:
     return library
 
 
-def count(what: dict, kernel: str | None, folder: Path) -> Count:
-    """Count ``what`` (the child's arguments) stepped by ``kernel`` (a file, or None: this one)."""
+def _environment() -> dict[str, str]:
+    """The children's: compiled for :data:`_CPU` into :func:`_cache_dir`, and one hash seed for all."""
+    return dict(os.environ, **_CPU, NUMBA_CACHE_DIR=str(_cache_dir()), PYTHONHASHSEED="0")
+
+
+def count(what: dict, kernel: str | None, folder: Path, env: dict[str, str]) -> Count:
+    """Count ``what`` (the child's arguments) stepped by ``kernel`` (a file, or None: this one), in ``env``."""
     if shutil.which("valgrind") is None:
         raise CannotCount("valgrind is not on PATH")
-    env = dict(os.environ, **_CPU, NUMBA_CACHE_DIR=str(_cache_dir()), PYTHONHASHSEED="0")
     job = json.dumps(dict(what, kernel=kernel, switch=str(folder / "switch.so")))
     child = [sys.executable, "-m", "sandmod.tools.instructions", "--child", job]
     native = subprocess.run(child, env=env, capture_output=True, text=True)  # compiles, unless cached
@@ -135,7 +141,7 @@ def _child(job: dict) -> None:
 
     import numba
 
-    from sandmod import benchmark, kernel
+    from sandmod import kernel
     from sandmod.loading import load_ruleset
 
     numba.set_num_threads(1)
@@ -165,7 +171,7 @@ def _line(name: str, c: Count, frames: int, cells: int) -> str:
 
 
 @click.command()
-@click.option("--scene", default="halves", show_default=True, type=click.Choice(["mix", "halves", "everything", "settled", "patch"]))
+@click.option("--scene", default="halves", show_default=True, type=click.Choice(list(benchmark.SCENES)))
 @click.option("--world", "world", type=click.Path(exists=True, dir_okay=False), help="A world file instead of a scene.")
 @click.option("--size", default=512, show_default=True, type=click.IntRange(64, 2048), help="The scene's width and height.")
 @click.option("--start", default=200, show_default=True, type=click.IntRange(0), help="Frames stepped before counting.")
@@ -179,7 +185,6 @@ def main(scene, world, size, start, frames, against, child) -> None:
         return
     what = dict(scene=scene, world=world, size=size, start=start, frames=frames)
     if world:
-        from sandmod import benchmark
         from sandmod.errors import ProblemsError
 
         try:
@@ -192,8 +197,6 @@ def main(scene, world, size, start, frames, against, child) -> None:
     else:
         name, cells = f"{scene} {size}x{size}", size * size
     if against:
-        from sandmod import benchmark
-
         try:
             benchmark.load_kernel(against)  # before counting anything: is it a kernel at all?
         except ValueError as error:
@@ -204,10 +207,11 @@ def main(scene, world, size, start, frames, against, child) -> None:
         with tempfile.TemporaryDirectory(prefix="sandmod-count-") as scratch:
             folder = Path(scratch)
             _switch_library(folder)
-            ours = count(what, None, folder)
+            env = _environment()
+            ours = count(what, None, folder, env)
             click.echo("  " + _line("this kernel", ours, frames, cells))
             if against:
-                theirs = count(what, str(Path(against).resolve()), folder)
+                theirs = count(what, str(Path(against).resolve()), folder, env)
                 click.echo("  " + _line(against, theirs, frames, cells))
                 same = "same frames" if theirs.digest == ours.digest else "OTHER FRAMES"
                 click.echo(f"  this kernel runs {ours.instructions / theirs.instructions:.3f}x the instructions of {against}, {same}")
