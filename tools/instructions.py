@@ -46,6 +46,9 @@ void counting_off(void) { CALLGRIND_STOP_INSTRUMENTATION; CALLGRIND_DUMP_STATS_A
 #: What callgrind counts, in the order of its ``totals:`` line.
 _EVENTS = ("Ir", "Bc", "Bcm", "Bi", "Bim")
 
+#: This sandmod's kernel, counted as a file like any other, so that both counts run the same Python.
+_THIS_KERNEL = str(Path(benchmark.__file__).with_name("kernel.py").resolve())
+
 #: The CPU the counted kernels are compiled for (and numba's cache keyed by).
 _CPU = {"NUMBA_CPU_NAME": "haswell", "NUMBA_CPU_FEATURES": ""}
 
@@ -102,12 +105,15 @@ def _environment() -> dict[str, str]:
     return dict(os.environ, **_CPU, NUMBA_CACHE_DIR=str(_cache_dir()), PYTHONHASHSEED="0")
 
 
-def count(what: dict, kernel: str | None, folder: Path, env: dict[str, str]) -> Count:
-    """Count ``what`` (the child's arguments) stepped by ``kernel`` (a file, or None: this one), in ``env``."""
+def count(what: dict, kernel: str, folder: Path, env: dict[str, str]) -> Count:
+    """Count ``what`` (the child's arguments) stepped by ``kernel`` (a kernel file), in ``env``."""
     if shutil.which("valgrind") is None:
         raise CannotCount("valgrind is not on PATH")
-    job = json.dumps(dict(what, kernel=kernel, switch=str(folder / "switch.so")))
-    child = [sys.executable, "-m", "sandmod.tools.instructions", "--child", job]
+    # The job goes in a file, so that every child's command line is the same to the byte: where its
+    # stack starts moves what Python does between frames, by a few thousand instructions.
+    job = folder / "job.json"
+    job.write_text(json.dumps(dict(what, kernel=kernel, switch=str(folder / "switch.so"))), encoding="utf-8")
+    child = [sys.executable, "-m", "sandmod.tools.instructions", "--child", str(job)]
     native = subprocess.run(child, env=env, capture_output=True, text=True)  # compiles, unless cached
     if native.returncode != 0:
         raise CannotCount(f"the frames did not run: {_last_line(native.stderr)}")
@@ -141,7 +147,6 @@ def _child(job: dict) -> None:
 
     import numba
 
-    from sandmod import kernel
     from sandmod.loading import load_ruleset
 
     numba.set_num_threads(1)
@@ -150,7 +155,7 @@ def _child(job: dict) -> None:
     else:
         bench = benchmark.scene_bench(load_ruleset(None, []), job["scene"], job["size"])
     world = bench.make()
-    world.kernel = benchmark.load_kernel(job["kernel"] or kernel.__file__)  # both ways alike, to the instruction
+    world.kernel = benchmark.load_kernel(job["kernel"])
     for _ in range(job["start"]):
         world.step()
     switch = ctypes.CDLL(job["switch"])
@@ -181,7 +186,7 @@ def _line(name: str, c: Count, frames: int, cells: int) -> str:
 def main(scene, world, size, start, frames, against, child) -> None:
     """Count the instructions the kernel runs a frame, on one thread, under valgrind."""
     if child:
-        _child(json.loads(child))
+        _child(json.loads(Path(child).read_text(encoding="utf-8")))
         return
     what = dict(scene=scene, world=world, size=size, start=start, frames=frames)
     if world:
@@ -208,7 +213,7 @@ def main(scene, world, size, start, frames, against, child) -> None:
             folder = Path(scratch)
             _switch_library(folder)
             env = _environment()
-            ours = count(what, None, folder, env)
+            ours = count(what, _THIS_KERNEL, folder, env)
             click.echo("  " + _line("this kernel", ours, frames, cells))
             if against:
                 theirs = count(what, str(Path(against).resolve()), folder, env)
