@@ -402,7 +402,6 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             flags[_at(y, x)] = (flags[_at(y, x)] & FRESH) | MOVED
                             break
                         timer[_at(y, x)] = left - 1
-                    h = _cell_key(move_key, x, y)
 
                     # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
                     # test: does any neighbour's bit show in the element's partner mask?
@@ -420,7 +419,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         partners &= near
                     if partners != 0:
                         reacted = False
-                        start = (h >> 1) & 3
+                        start = (_cell_key(move_key, x, y) >> 1) & 3
                         for k in range(4):
                             d = (start + k) & 3
                             nx = x + (1, 0, -1, 0)[d]
@@ -494,6 +493,9 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                     break
                         if not can_flow and old_vx == 0 and old_vy == 0:
                             break  # at rest, every move shut (by cells done this frame)
+                    # Straight into a fluid below: one cell, where its speed is lost anyway; no rolls needed.
+                    straight = opens and old_vx == 0 and cells[_at(ty, x)] != 0
+                    h = 0 if straight else _cell_key(move_key, x, y)
                     cvx = old_vx
                     cvy = old_vy
                     loose = flags[_at(y, x)] & LOOSE
@@ -517,7 +519,11 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         d0y = _cells_moved(cvy, (r >> 8) & 255)
                         tries = 1 if d0x != 0 or d0y != 0 else 0
                     else:
-                        if opens:
+                        if straight:
+                            falling = True
+                            loose = LOOSE
+                            d0y = g
+                        elif opens:
                             # Falling (rising): speed up, go at least one cell, drift sideways.
                             falling = True
                             r = _mix32(h ^ SALT_ROUND)
@@ -687,24 +693,41 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
                     # A move knocks resting grains loose: those that could follow into the
                     # vacated cell (pushed towards it) and those beside the arrival (pushed away).
-                    for k in range(6):
-                        if k < 4:
-                            nx = x + (-1, 1, -1, 1)[k]
-                            ny = y - (0, 0, 1, 1)[k]
-                            push = (1, -1, 1, -1)[k]
-                        else:
-                            nx = px + (-1, 1)[k - 4]
-                            ny = py
-                            push = (-1, 1)[k - 4]
-                        if not _inside(nx, ny, width, height):
-                            continue
-                        if (flags[_at(ny, nx)] & LOOSE) != 0:
-                            continue  # already in motion (fluids stay loose)
-                        c = cells[_at(ny, nx)]
-                        if knock_chance[c] != 0:  # only powders have a chance
-                            if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
-                                flags[_at(ny, nx)] |= LOOSE
-                                vx[_at(ny, nx)] = push * KNOCK_SPEED
+                    if not (
+                        x > 0
+                        and y > 0
+                        and px > 0
+                        and x + 1 < width
+                        and px + 1 < width
+                        and (
+                            flags[_at(y, x - 1)]
+                            & flags[_at(y, x + 1)]
+                            & flags[_at(y - 1, x - 1)]
+                            & flags[_at(y - 1, x + 1)]
+                            & flags[_at(py, px - 1)]
+                            & flags[_at(py, px + 1)]
+                            & LOOSE
+                        )
+                        != 0
+                    ):  # unless all six are in motion already (the common case)
+                        for k in range(6):
+                            if k < 4:
+                                nx = x + (-1, 1, -1, 1)[k]
+                                ny = y - (0, 0, 1, 1)[k]
+                                push = (1, -1, 1, -1)[k]
+                            else:
+                                nx = px + (-1, 1)[k - 4]
+                                ny = py
+                                push = (-1, 1)[k - 4]
+                            if not _inside(nx, ny, width, height):
+                                continue
+                            if (flags[_at(ny, nx)] & LOOSE) != 0:
+                                continue  # already in motion (fluids stay loose)
+                            c = cells[_at(ny, nx)]
+                            if knock_chance[c] != 0:  # only powders have a chance
+                                if (_cell_key(knock_key, nx, ny) >> 8) < knock_chance[c]:
+                                    flags[_at(ny, nx)] |= LOOSE
+                                    vx[_at(ny, nx)] = push * KNOCK_SPEED
 
                 if busy:  # wake every cell within two cells of the cells it moved between
                     wx0 = max(bx0 - WAKE_MARGIN, 0)
