@@ -405,16 +405,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
                     # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
                     # test: does any neighbour's bit show in the element's partner mask?
-                    interior = _within(x - 1, width - 2) and _within(y - 1, height - 2)  # all eight neighbours in the world
                     partners = reactive[e]
-                    if partners != 0 and interior:
-                        partners &= (
-                            (1 << (cells[_at(y, x + 1)] & 63))
-                            | (1 << (cells[_at(y + 1, x)] & 63))
-                            | (1 << (cells[_at(y, x - 1)] & 63))
-                            | (1 << (cells[_at(y - 1, x)] & 63))
-                        )
-                    elif partners != 0:
+                    if partners != 0:
                         near = 0
                         if x + 1 < width:
                             near |= 1 << (cells[_at(y, x + 1)] & 63)
@@ -483,20 +475,11 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if fluid and old_vx == 0 and old_vy == 0:
                         # At rest, first a cheap test of its five moves' cells (on, down a side, sideways):
                         # holds none an element it may displace? Then it stays put, as most of a body of liquid does.
-                        if interior:
-                            near = (
-                                (1 << (cells[_at(ty, x)] & 63))
-                                | (1 << (cells[_at(ty, x + 1)] & 63))
-                                | (1 << (cells[_at(ty, x - 1)] & 63))
-                                | (1 << (cells[_at(y, x + 1)] & 63))
-                                | (1 << (cells[_at(y, x - 1)] & 63))
-                            )
-                        else:
-                            near = 0
-                            for k in range(5):
-                                nx, ny = _fluid_move_cell(x, y, g, k)
-                                if _inside(nx, ny, width, height):
-                                    near |= 1 << (cells[_at(ny, nx)] & 63)
+                        near = 0
+                        for k in range(5):
+                            nx, ny = _fluid_move_cell(x, y, g, k)
+                            if _inside(nx, ny, width, height):
+                                near |= 1 << (cells[_at(ny, nx)] & 63)
                         if (displaces[e] & near) == 0:
                             break
                     opens = kind != PARTICLE and _within(ty, height) and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
