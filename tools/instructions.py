@@ -15,9 +15,9 @@ the frames from ``--start`` (stepped before counting) on; branches are
 counted too, and mispredictions by callgrind's simple model of a predictor.
 It needs valgrind and a C compiler with valgrind's headers (for the two
 calls that switch counting on and off), on x86-64 Linux. The kernels are
-compiled for a Haswell, whose instructions valgrind runs (it cannot run
-AVX-512), in a cache folder of their own: the first count of a version
-compiles it (about half a minute, natively), later ones take seconds.
+compiled for this machine's CPU less what valgrind cannot run (AVX-512),
+in a cache folder of their own: the first count of a version compiles it
+(about half a minute, natively), later ones take seconds.
 """
 
 from __future__ import annotations
@@ -49,8 +49,17 @@ _EVENTS = ("Ir", "Bc", "Bcm", "Bi", "Bim")
 #: This sandmod's kernel, counted as a file like any other, so that both counts run the same Python.
 _THIS_KERNEL = str(Path(benchmark.__file__).with_name("kernel.py").resolve())
 
-#: The CPU the counted kernels are compiled for (and numba's cache keyed by).
-_CPU = {"NUMBA_CPU_NAME": "haswell", "NUMBA_CPU_FEATURES": ""}
+#: What valgrind cannot run, switched off in the code counted (the rest of AVX-512 and AMX need the first two).
+_NOT_UNDER_VALGRIND = ("avx512f", "amx-tile", "avxvnni")
+
+
+def _cpu() -> dict[str, str]:
+    """The CPU the counted kernels are compiled for (and numba's cache is keyed by): this machine's, less
+    what valgrind cannot run. The code counted is then the code timed: compiled for another CPU (a Haswell,
+    say), the same kernel runs other instructions, and changes to it count differently."""
+    from llvmlite import binding  # numba's compiler, without numba
+
+    return {"NUMBA_CPU_NAME": binding.get_host_cpu_name(), "NUMBA_CPU_FEATURES": ",".join("-" + f for f in _NOT_UNDER_VALGRIND)}
 
 
 @dataclass(frozen=True)
@@ -101,8 +110,8 @@ def _switch_library(folder: Path) -> Path:
 
 
 def _environment() -> dict[str, str]:
-    """The children's: compiled for :data:`_CPU` into :func:`_cache_dir`, and one hash seed for all."""
-    return dict(os.environ, **_CPU, NUMBA_CACHE_DIR=str(_cache_dir()), PYTHONHASHSEED="0")
+    """The children's: compiled for :func:`_cpu` into :func:`_cache_dir`, and one hash seed for all."""
+    return dict(os.environ, **_cpu(), NUMBA_CACHE_DIR=str(_cache_dir()), PYTHONHASHSEED="0")
 
 
 def count(what: dict, kernel: str, folder: Path, env: dict[str, str]) -> Count:
