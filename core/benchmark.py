@@ -247,25 +247,38 @@ class FramesDiffer(Exception):
         self.frame = frame
 
 
-class _FlatMarks:
-    """A kernel from before the chunk marks ``woken`` and ``stirred`` had a cache line each as a third
-    axis (entry ``[cy, cx, 0]``): its ``step`` is handed the (rows, cols) views of them it was written for."""
+class _OlderKernel:
+    """A kernel whose ``step`` was written for fewer arguments, or for the chunk marks ``woken``
+    and ``stirred`` before they had a cache line each as a third axis (entry ``[cy, cx, 0]``):
+    its ``step`` is handed the arguments, and the (rows, cols) views of the marks, it was written for."""
 
-    def __init__(self, module: ModuleType):
-        self.module = module
+    def __init__(self, module: ModuleType, takes: int, flat: bool):
+        self.module, self.takes, self.flat = module, takes, flat
 
     def __getattr__(self, name: str):
         return getattr(self.module, name)
 
     def step(self, *args):
-        return self.module.step(*(a[:, :, 0] if isinstance(a, np.ndarray) and a.ndim == 3 else a for a in args))
+        args = args[: self.takes]
+        if self.flat:
+            args = tuple(a[:, :, 0] if isinstance(a, np.ndarray) and a.ndim == 3 else a for a in args)
+        return self.module.step(*args)
 
 
-def load_kernel(path) -> ModuleType | _FlatMarks:
+def load_kernel(path) -> ModuleType | _OlderKernel:
     """Another version of ``sandmod/kernel.py`` (say, from ``git show REV:core/kernel.py``), importable
     beside this one; its relative imports name this sandmod's modules. Raises ValueError if it is none."""
     module = _import_kernel(path)
-    return module if hasattr(module, "_mark") else _FlatMarks(module)
+    from . import kernel
+
+    takes = _arguments(module.step)
+    flat = not hasattr(module, "_mark")
+    return module if takes >= _arguments(kernel.step) and not flat else _OlderKernel(module, takes, flat)
+
+
+def _arguments(function) -> int:
+    """How many arguments a (numba-compiled or plain) function takes."""
+    return getattr(function, "py_func", function).__code__.co_argcount
 
 
 def _import_kernel(path) -> ModuleType:

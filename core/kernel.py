@@ -248,8 +248,18 @@ def _wake(woken, stirred, stir, x0, y0, x1, y1):
                 stirred[_mark(wy, wx)] = 1
 
 
+@njit(inline="always", cache=True)  # it takes an array: see _wake
+def _elements_in(cells, x0, y0, x1, y1):
+    """The mask (bit e % 64 for element e, as in ``reactive``) of the elements in columns x0..x1-1 of rows y0..y1-1."""
+    present = np.int64(0)
+    for y in range(y0, y1):
+        for x in range(x0, x1):
+            present |= np.int64(1) << (cells[_at(y, x)] & 63)
+    return present
+
+
 @njit(cache=True)
-def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1):
+def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
     A row of a chunk is updated when the chunk's mark in ``awake`` (from last
@@ -260,6 +270,15 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     by two cells of one temperature trading places, in ``stirred`` too (see
     :func:`conduct`). Explosives that go off are marked DETONATING and
     counted in ``detonations[tile]``, for :func:`take_detonations` after the step.
+
+    ``present`` masks the elements that may be next to a cell being updated:
+    those in the rows next to it (across the region and a cell past it) before
+    the first update of the row, each element that a cell turns into since,
+    and ``also_present`` (-1 in tests: all). Moves bring in nothing new: a mover
+    trades places with a cell next to it, or with an empty one past an empty
+    one next to it. A cell whose partners, or whose fluid moves' elements, are
+    not in the mask skips looking at its neighbours for them (in a world of
+    sand and water, every cell does).
     """
     cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
     height, width = cells.shape
@@ -280,6 +299,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     fire_key = _mix32(move_key ^ SALT_FIRE)
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
+    present = also_present
+    unseen = y1 + 1  # rows from here up are not in `present` yet (rows from here down to the next row to update are)
 
     for y in range(y1 - 1, y0 - 1, -1):
         cy = y >> CHUNK_SHIFT
@@ -290,6 +311,9 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             row = y - (cy << CHUNK_SHIFT)
             if not (_covers(awake[_at(cy, cx)], row) or _covers(woke, row)):
                 continue  # asleep: nothing in this row of the chunk or within two cells of it changed
+            if unseen > y - 1:  # the elements of the rows next to this one, across the region and one cell past it
+                present |= _elements_in(cells, max(x0 - 1, 0), max(y - 1, 0), min(x1 + 1, width), min(unseen, y + 2, height))
+                unseen = max(y - 1, 0)
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
             for i in range(sx1 - sx0):
@@ -353,6 +377,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                         if product != 0 and _inside(nx, ny, width, height) and cells[_at(ny, nx)] == 0:
                                             if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
                                                 cells[_at(ny, nx)] = product
+                                                present |= np.int64(1) << (product & 63)
                                                 stir = True
                                                 shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(
                                                     _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
@@ -376,6 +401,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if into != e:
                             busy = stir = True
                             cells[_at(y, x)] = into
+                            present |= np.int64(1) << (into & 63)
                             shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                             vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
                             heat[_at(y, x)] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
@@ -395,6 +421,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if left <= 1:
                             into = life_into[e]
                             cells[_at(y, x)] = into
+                            present |= np.int64(1) << (into & 63)
                             stir = True
                             shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                             vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
@@ -405,7 +432,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
                     # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
                     # test: does any neighbour's bit show in the element's partner mask?
-                    partners = reactive[e]
+                    partners = reactive[e] & present
                     if partners != 0:
                         near = 0
                         if x + 1 < width:
@@ -444,6 +471,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             warm = react_heat[e, b]
                             if into_a != e:
                                 cells[_at(y, x)] = into_a
+                                present |= np.int64(1) << (into_a & 63)
                                 stir = True
                                 shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
                                 vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
@@ -451,6 +479,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 flags[_at(y, x)] &= FRESH
                             if into_b != b:
                                 cells[_at(ny, nx)] = into_b
+                                present |= np.int64(1) << (into_b & 63)
                                 stir = True
                                 shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
                                 vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
@@ -475,6 +504,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if fluid and old_vx == 0 and old_vy == 0:
                         # At rest, first a cheap test of its five moves' cells (on, down a side, sideways):
                         # holds none an element it may displace? Then it stays put, as most of a body of liquid does.
+                        if (displaces[e] & present) == 0:
+                            break  # none is even near
                         near = 0
                         for k in range(5):
                             nx, ny = _fluid_move_cell(x, y, g, k)
@@ -484,7 +515,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             break
                     opens = kind != PARTICLE and _within(ty, height) and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
-                    if fluid and not opens:
+                    if fluid and not opens and (displaces[e] & present) != 0:
                         for k in range(1, 5):  # the same cells as above, less the one below
                             nx, ny = _fluid_move_cell(x, y, g, k)
                             if _inside(nx, ny, width, height):
@@ -682,6 +713,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
                             into = carry[_at(py, px)]
                             cells[_at(py, px)] = into
+                            present |= np.int64(1) << (into & 63)
                             stir = True
                             carry[_at(py, px)] = 0
                             heat[_at(py, px)] = _energy(_temperature(int(heat[_at(py, px)]), heat_recip[e]), heat_cap[into])
@@ -851,7 +883,7 @@ def clear_marks(flags, awake):
 
 
 @njit(cache=True, parallel=True)
-def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count):
+def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present):
     """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one thread per tile at a time."""
     height, width = s.cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
@@ -862,11 +894,11 @@ def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
         x1 = min(x0 + TILE, width)
         y1 = min(y0 + TILE, height)
         conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
-        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1)
+        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present)
 
 
 @njit(cache=True)
-def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands):
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present):
     """Advance the world by one frame; returns how many explosives went off (see :func:`take_detonations`).
 
     The world is cut into tiles of 2 x 2 chunks, updated in four passes by
@@ -877,7 +909,9 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     the rows of chunks that ``awake``'s marks name are touched; ``awake``
     then holds the marks for the next frame. ``even`` marks chunks whose heat
     needs no sweep (see :func:`conduct`). ``hands``, the number of threads,
-    only decides which thread takes which tile.
+    only decides which thread takes which tile. ``also_present`` is 0, or -1
+    to look at the neighbours of every cell for partners (see
+    :func:`step_region`): tests compare the two.
     """
     flags = s.flags
     height, width = flags.shape
@@ -913,7 +947,7 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
             for k in range(hand, count, hands):
                 order[dealt] = todo[k]
                 dealt += 1
-        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count)
+        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present)
     for cy in range(chunks_y):
         for cx in range(chunks_x):
             awake[cy, cx] = woken[cy, cx, 0]

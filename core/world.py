@@ -223,6 +223,7 @@ class World:
         self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
         self._stirred = _on_own_lines(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
         self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step
+        self._also_present = 0  # -1: the kernel looks for partners next to every cell, none skipped (for tests)
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
@@ -429,6 +430,7 @@ class World:
             self._stirred,
             self._detonations,
             get_num_threads(),
+            self._also_present,
         )
         if went_off:  # top to bottom, left to right, whichever thread found them
             self._explode(kernel.take_detonations(self.state, self.tables, self._detonations), 0)

@@ -283,7 +283,21 @@ def test_a_kernel_from_before_the_marks_had_their_own_lines_is_handed_them_flat(
     )
     marks = np.zeros((3, 4, 32), np.uint16)
     old = benchmark.load_kernel(tmp_path / "kernel.py")
-    assert old.step(0, 0, 0, 0, 0, 0, marks[:, :, 0], marks, 0, marks, 0, 1) == ((3, 4), (3, 4), (3, 4))
+    assert old.step(0, 0, 0, 0, 0, 0, marks[:, :, 0], marks, 0, marks, 0, 1, 0) == ((3, 4), (3, 4), (3, 4))
+
+
+def test_a_kernel_from_before_a_later_argument_of_step_is_handed_those_it_takes(tmp_path):
+    (tmp_path / "kernel.py").write_text(
+        "def _mark(cy, cx):\n    return cy, cx, 0\n\n\n"
+        "def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands):\n"
+        "    return hands, woken.shape\n\n\ntake_detonations = explode = step\n"
+    )
+    marks = np.zeros((3, 4, 32), np.uint16)
+    old = benchmark.load_kernel(tmp_path / "kernel.py")
+    assert old.step(0, 0, 0, 0, 0, 0, marks[:, :, 0], marks, 0, marks, 0, 2, -1) == (2, (3, 4, 32))
+    from sandmod import kernel
+
+    assert benchmark.load_kernel(kernel.__file__) is kernel
 
 
 def test_a_kernel_file_loads_from_numbas_cache_in_a_later_process(tmp_path):

@@ -12,8 +12,9 @@ import numba
 import numpy as np
 import pytest
 
-from conftest import make_world, run
-from sandmod.loading import load_world
+from conftest import as_rows, make_world, run, write_mods
+from sandmod import benchmark
+from sandmod.loading import load_ruleset, load_world
 from sandmod.world import CACHE_LINE, CHUNK, PART, TILE, WAKE_MARGIN, WHOLE, World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
@@ -81,6 +82,88 @@ def test_a_hot_grain_falling_through_even_air_warms_it_on_its_way(ruleset):
     sand = np.argwhere(skipping.cells == ruleset.index("sand"))[0]
     assert sand[0] > 100  # it fell into chunks whose heat was even
     assert skipping._temperature_units()[70:100].max() > skipping._temperature_units()[0, 0]  # and warmed the air there
+
+
+def stepped_both_ways(world_of, frames):
+    """Step two copies of a world, one skipping absent partners (see kernel.step_region), one looking
+    next to every cell; returns the frame at which they first differ (None: never)."""
+    skipping, looking = world_of(), world_of()
+    looking._also_present = -1
+    for frame in range(frames):
+        skipping.step()
+        looking.step()
+        if digest(skipping) != digest(looking):
+            return frame
+    return None
+
+
+def random_world(ruleset, seed, size=40):
+    """One to three elements, at random, over a world that is full or has gaps, some cells heated or chilled."""
+    r = np.random.default_rng(seed)
+    world = World(ruleset, size, size, seed)
+    kinds = r.choice(np.arange(1, len(ruleset.elements)), size=r.integers(1, 4), replace=False)
+    pick = r.integers(0, len(kinds) + 1, size=(size, size))
+    for i, element in enumerate(kinds):
+        world.paint(pick == i, int(element))
+    if r.random() < 0.5:
+        world.paint(pick == len(kinds), int(kinds[0]))  # full: not one empty cell
+    world.set_temperature(r.random((size, size)) < 0.3, float(r.choice([-50, 20, 150, 500, 1500])))
+    return world
+
+
+def test_skipping_absent_partners_changes_nothing(ruleset):
+    # Fire lit, phases changed, particles landed: elements new to a region on the frame they appear.
+    differ = [(seed, stepped_both_ways(lambda: random_world(ruleset, seed), 40)) for seed in range(120)]
+    assert [(seed, frame) for seed, frame in differ if frame is not None] == []
+    world = World(ruleset, 96, 96, 5)
+    benchmark.SCENES["everything"](world, ruleset)
+    assert stepped_both_ways(lambda: world_copy(world), 100) is None
+
+
+def world_copy(world):
+    copy = World(world.ruleset, world.width, world.height, world.seed)
+    for mine, theirs in zip(copy.state, world.state):
+        mine[...] = theirs
+    return copy
+
+
+def vanishing_mod(tmp_path):
+    return write_mods(
+        tmp_path / "mods",
+        {
+            "vanish.toml": """
+            [mod]
+            name = "vanish"
+            [elements.melt]
+            archetype = "static"
+            color = "#aa8800"
+            [elements.fleeting]
+            archetype = "static"
+            color = "#442200"
+            lifetime = { frames = 1, becomes = "empty" }
+            [[reactions]]
+            a = "melt"
+            b = "stone"
+            a_becomes = "empty"
+            chance = 1
+            """
+        },
+    )
+
+
+@pytest.mark.parametrize(
+    "rows",
+    [
+        ["WW", "SM"],  # the bottom row goes right to left on frame 0: melt looks first, and becomes empty
+        ["WW", "MS"],  # stone looks first, and the melt it touches becomes empty
+        ["WW", "FF"],  # fleeting cells live one frame
+    ],
+)
+def test_a_cell_emptied_in_a_full_region_takes_the_water_above_on_that_frame(registry, tmp_path, rows):
+    rs = load_ruleset(["vanish", "water"], [vanishing_mod(tmp_path)], registry=registry)
+    legend = {".": "empty", "W": "water", "S": "stone", "M": "melt", "F": "fleeting"}
+    assert stepped_both_ways(lambda: make_world(rs, rows, legend), 1) is None
+    assert "W" in as_rows(run(make_world(rs, rows, legend), 1), legend)[1]  # the water fell in at once
 
 
 def test_frames_are_the_same_on_any_number_of_threads():
@@ -201,6 +284,6 @@ def test_step_calls_the_kernels_with_plain_numbers_not_literal_ones(ruleset):
 
     world = World(ruleset, 100, 70)
     step = numba.njit(kernel.step.py_func)  # typed here, so the kernels it calls are looked up (in the cache) again
-    step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1)
+    step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0)
     for called in (kernel.update_tiles, kernel.clear_marks):
         assert called.signatures and not any("Literal" in str(sig) for sig in called.signatures), called
