@@ -248,13 +248,19 @@ def _wake(woken, stirred, stir, x0, y0, x1, y1):
                 stirred[_mark(wy, wx)] = 1
 
 
+@njit(cache=True)
+def _bit(e):
+    """Element e's bit in the element masks (``reactive``, ``displaces``): bit e % 64."""
+    return np.int64(1) << (e & 63)
+
+
 @njit(inline="always", cache=True)  # it takes an array: see _wake
 def _elements_in(cells, x0, y0, x1, y1):
     """The mask (bit e % 64 for element e, as in ``reactive``) of the elements in columns x0..x1-1 of rows y0..y1-1."""
     present = np.int64(0)
     for y in range(y0, y1):
         for x in range(x0, x1):
-            present |= np.int64(1) << (cells[_at(y, x)] & 63)
+            present |= _bit(cells[_at(y, x)])
     return present
 
 
@@ -377,7 +383,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                         if product != 0 and _inside(nx, ny, width, height) and cells[_at(ny, nx)] == 0:
                                             if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
                                                 cells[_at(ny, nx)] = product
-                                                present |= np.int64(1) << (product & 63)
+                                                present |= _bit(product)
                                                 stir = True
                                                 shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(
                                                     _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
@@ -401,7 +407,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if into != e:
                             busy = stir = True
                             cells[_at(y, x)] = into
-                            present |= np.int64(1) << (into & 63)
+                            present |= _bit(into)
                             shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                             vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
                             heat[_at(y, x)] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
@@ -421,7 +427,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if left <= 1:
                             into = life_into[e]
                             cells[_at(y, x)] = into
-                            present |= np.int64(1) << (into & 63)
+                            present |= _bit(into)
                             stir = True
                             shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                             vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
@@ -436,13 +442,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if partners != 0:
                         near = 0
                         if x + 1 < width:
-                            near |= 1 << (cells[_at(y, x + 1)] & 63)
+                            near |= _bit(cells[_at(y, x + 1)])
                         if y + 1 < height:
-                            near |= 1 << (cells[_at(y + 1, x)] & 63)
+                            near |= _bit(cells[_at(y + 1, x)])
                         if x > 0:
-                            near |= 1 << (cells[_at(y, x - 1)] & 63)
+                            near |= _bit(cells[_at(y, x - 1)])
                         if y > 0:
-                            near |= 1 << (cells[_at(y - 1, x)] & 63)
+                            near |= _bit(cells[_at(y - 1, x)])
                         partners &= near
                     if partners != 0:
                         reacted = False
@@ -471,7 +477,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             warm = react_heat[e, b]
                             if into_a != e:
                                 cells[_at(y, x)] = into_a
-                                present |= np.int64(1) << (into_a & 63)
+                                present |= _bit(into_a)
                                 stir = True
                                 shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
                                 vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
@@ -479,7 +485,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 flags[_at(y, x)] &= FRESH
                             if into_b != b:
                                 cells[_at(ny, nx)] = into_b
-                                present |= np.int64(1) << (into_b & 63)
+                                present |= _bit(into_b)
                                 stir = True
                                 shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
                                 vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
@@ -510,7 +516,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         for k in range(5):
                             nx, ny = _fluid_move_cell(x, y, g, k)
                             if _inside(nx, ny, width, height):
-                                near |= 1 << (cells[_at(ny, nx)] & 63)
+                                near |= _bit(cells[_at(ny, nx)])
                         if (displaces[e] & near) == 0:
                             break
                     opens = kind != PARTICLE and _within(ty, height) and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
@@ -713,7 +719,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if loose != 0:  # landed: put down what it carries (or vanish), at the particle's temperature
                             into = carry[_at(py, px)]
                             cells[_at(py, px)] = into
-                            present |= np.int64(1) << (into & 63)
+                            present |= _bit(into)
                             stir = True
                             carry[_at(py, px)] = 0
                             heat[_at(py, px)] = _energy(_temperature(int(heat[_at(py, px)]), heat_recip[e]), heat_cap[into])
