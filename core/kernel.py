@@ -76,6 +76,7 @@ from .compiler import (  # noqa: E402
     TEMP_ONE,
 )
 from .modspec import MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: E402
+from .prefetch import prefetch  # noqa: E402
 from .world import (  # noqa: E402
     BURNING,
     CHUNK,
@@ -116,6 +117,7 @@ KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
 SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
 SALT_FIRE = 0x61C88647
+LINE_CELLS = 64 // 4  # cells in a 64-byte cache line of the widest array (heat): a row's lines are asked for this far apart
 EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
 
 
@@ -322,6 +324,15 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                 unseen = max(y - 1, 0)
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
+            for ahead in range(max(y - 2, 0), y):  # ask for the next two rows' lines while this one is updated
+                for ax in range(sx0, sx1, LINE_CELLS):
+                    prefetch(cells, ahead, ax)
+                    prefetch(flags, ahead, ax)
+                    prefetch(heat, ahead, ax)
+                    prefetch(vx, ahead, ax)
+                    prefetch(vy, ahead, ax)
+                    prefetch(shade, ahead, ax)
+                    prefetch(timer, ahead, ax)
             for i in range(sx1 - sx0):
                 x = sx0 + i if forward else sx1 - 1 - i
                 e = cells[_at(y, x)]
@@ -830,6 +841,11 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
             changed_x0, changed_x1 = sx1, sx0 - 1  # the first and last cell of the segment whose heat changed
+            ahead = y - 1 if backwards else y + 2  # the row the sweep reads next
+            if _within(ahead, height):
+                for ax in range(sx0, sx1, LINE_CELLS):
+                    prefetch(cells, ahead, ax)
+                    prefetch(heat, ahead, ax)
             for i in range(sx1 - sx0):
                 x = sx1 - 1 - i if backwards else sx0 + i
                 e = cells[_at(y, x)]
