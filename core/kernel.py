@@ -118,6 +118,7 @@ SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
 SALT_FIRE = 0x61C88647
 LINE_CELLS = 64 // 4  # cells in a 64-byte cache line of the widest array (heat): a row's lines are asked for this far apart
+CACHED_CELLS = 1 << 16  # a world of no more cells (about a megabyte of state) stays in the CPU's cache: nothing to prefetch
 EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
 
 
@@ -308,6 +309,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
     present = also_present
+    far = height * width > CACHED_CELLS  # prefetch rows ahead (see below)
     unseen = y1 + 1  # rows from here up are not in `present` yet (rows from here down to the next row to update are)
 
     for y in range(y1 - 1, y0 - 1, -1):
@@ -324,15 +326,19 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                 unseen = max(y - 1, 0)
             sx0 = max(x0, cx << CHUNK_SHIFT)
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
-            for ahead in range(max(y - 2, 0), y):  # ask for the next two rows' lines while this one is updated
-                for ax in range(sx0, sx1, LINE_CELLS):
-                    prefetch(cells, ahead, ax)
-                    prefetch(flags, ahead, ax)
-                    prefetch(heat, ahead, ax)
-                    prefetch(vx, ahead, ax)
-                    prefetch(vy, ahead, ax)
-                    prefetch(shade, ahead, ax)
-                    prefetch(timer, ahead, ax)
+            if far:  # ask for the row two above (at the region's first row, the one above too) while this one is updated:
+                # the lines at the segment's two ends in each array, and heat's (four bytes a cell) between
+                for ahead in range(max(y - 2, 0), y if y == y1 - 1 else y - 1):
+                    for ax in range(sx0 + LINE_CELLS, sx1 - 1, LINE_CELLS):
+                        prefetch(heat, ahead, ax)
+                    for ax in (sx0, sx1 - 1):
+                        prefetch(cells, ahead, ax)
+                        prefetch(flags, ahead, ax)
+                        prefetch(heat, ahead, ax)
+                        prefetch(vx, ahead, ax)
+                        prefetch(vy, ahead, ax)
+                        prefetch(shade, ahead, ax)
+                        prefetch(timer, ahead, ax)
             for i in range(sx1 - sx0):
                 x = sx0 + i if forward else sx1 - 1 - i
                 e = cells[_at(y, x)]
@@ -821,6 +827,7 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
     heat_cap, heat_recip, conductance, cooling = t.heat_cap, t.heat_recip, t.conductance, t.cooling
     ambient = int(t.temp_start[0])  # the air's temperature is the world's outside
     backwards = (frame & 1) == 1
+    far = height * width > CACHED_CELLS  # prefetch the next row (see step_region)
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
     first_cy, end_cy = y0 >> CHUNK_SHIFT, ((y1 - 1) >> CHUNK_SHIFT) + 1
@@ -842,7 +849,7 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
             sx1 = min(x1, (cx + 1) << CHUNK_SHIFT)
             changed_x0, changed_x1 = sx1, sx0 - 1  # the first and last cell of the segment whose heat changed
             ahead = y - 1 if backwards else y + 2  # the row the sweep reads next
-            if _within(ahead, height):
+            if far and _within(ahead, height):
                 for ax in range(sx0, sx1, LINE_CELLS):
                     prefetch(cells, ahead, ax)
                     prefetch(heat, ahead, ax)
