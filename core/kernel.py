@@ -79,6 +79,7 @@ from .modspec import MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: E402
 from .prefetch import prefetch  # noqa: E402
 from .world import (  # noqa: E402
     BURNING,
+    CACHE_LINE,
     CHUNK,
     CHUNK_SHIFT,
     DETONATING,
@@ -117,7 +118,7 @@ KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
 SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
 SALT_FIRE = 0x61C88647
-LINE_CELLS = 64 // 4  # cells in a 64-byte cache line of the widest array (heat): a row's lines are asked for this far apart
+LINE_CELLS = CACHE_LINE // 4  # cells in a cache line of the widest array (heat, 4 bytes): a row's lines are asked for this far apart
 CACHED_CELLS = 1 << 16  # a world of no more cells (about a megabyte of state) stays in the CPU's cache: nothing to prefetch
 EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
 
