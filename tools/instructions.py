@@ -69,7 +69,7 @@ class Count:
     instructions: int
     branches: int
     mispredicted: int  # by callgrind's model
-    digest: str  # of the world's arrays after the last frame
+    digest: str  # of the cells' arrays after the last frame (not the chunks' marks: one kernel may wake finer than another)
 
     @classmethod
     def from_totals(cls, line: str, digest: str) -> Count:
@@ -174,7 +174,7 @@ def _child(job: dict) -> None:
     for _ in range(job["frames"]):
         world.step()
     switch.counting_off()
-    print(hashlib.sha1(b"".join(a.tobytes() for a in benchmark._arrays(world))).hexdigest())
+    print(hashlib.sha1(b"".join(a.tobytes() for a in world.state)).hexdigest())
 
 
 def _line(name: str, c: Count, frames: int, cells: int) -> str:
