@@ -278,7 +278,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     come up, widens the ``woken`` marks to the rows within two cells of where
     it happened, and where an element or a heat changed, other than
     by two cells of one temperature trading places, in ``stirred`` too (see
-    :func:`conduct`). Explosives that go off are marked DETONATING and
+    :func:`conduct`): once per row of a chunk, for a box around that row's
+    changes. Explosives that go off are marked DETONATING and
     counted in ``detonations[tile]``, for :func:`take_detonations` after the step.
 
     ``present`` masks the elements that may be next to a cell being updated:
@@ -340,6 +341,11 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         prefetch(vy, ahead, ax)
                         prefetch(shade, ahead, ax)
                         prefetch(timer, ahead, ax)
+            # The cells the segment's updates changed (or may change later), and those that stirred, as two
+            # boxes: woken once, at the segment's end. A box may take in cells no single update did: more
+            # waking and stirring, which changes nothing but the work.
+            busy_x0, busy_x1, busy_y0, busy_y1 = sx1, sx0 - 1, y, y
+            stir_x0, stir_x1, stir_y0, stir_y1 = sx1, sx0 - 1, y, y
             for i in range(sx1 - sx0):
                 x = sx0 + i if forward else sx1 - 1 - i
                 e = cells[_at(y, x)]
@@ -785,21 +791,34 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                     flags[_at(ny, nx)] |= LOOSE
                                     vx[_at(ny, nx)] = push * KNOCK_SPEED
 
-                if busy:  # wake every cell within two cells of the cells it moved between
-                    wx0 = max(bx0 - WAKE_MARGIN, 0)
-                    wy0 = max(by0 - WAKE_MARGIN, 0)
-                    wx1 = min(bx1 + WAKE_MARGIN, width - 1)
-                    wy1 = min(by1 + WAKE_MARGIN, height - 1)
-                    if wy0 >> CHUNK_SHIFT == wy1 >> CHUNK_SHIFT and wx0 >> CHUNK_SHIFT == wx1 >> CHUNK_SHIFT:
-                        # The common case: well inside this chunk.
-                        woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))
-                        if stir:
-                            stirred[_mark(cy, cx)] = 1
-                    else:
-                        woken[_mark(cy, cx)] = woke
-                        _wake(woken, stirred, stir, wx0, wy0, wx1, wy1)
-                        woke = np.int64(woken[_mark(cy, cx)])
+                if busy:  # the cells it moved between go in the segment's boxes
+                    busy_x0, busy_x1 = min(busy_x0, bx0), max(busy_x1, bx1)
+                    busy_y0, busy_y1 = min(busy_y0, by0), max(busy_y1, by1)
+                    if stir:
+                        stir_x0, stir_x1 = min(stir_x0, bx0), max(stir_x1, bx1)
+                        stir_y0, stir_y1 = min(stir_y0, by0), max(stir_y1, by1)
+            if busy_x0 <= busy_x1:  # wake every cell within two cells of the box
+                wx0 = max(busy_x0 - WAKE_MARGIN, 0)
+                wy0 = max(busy_y0 - WAKE_MARGIN, 0)
+                wx1 = min(busy_x1 + WAKE_MARGIN, width - 1)
+                wy1 = min(busy_y1 + WAKE_MARGIN, height - 1)
+                if wx0 >> CHUNK_SHIFT == wx1 >> CHUNK_SHIFT and wy0 >> CHUNK_SHIFT == wy1 >> CHUNK_SHIFT:
+                    woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))  # well inside this chunk
+                else:
+                    woken[_mark(cy, cx)] = woke
+                    _wake(woken, stirred, False, wx0, wy0, wx1, wy1)
+                    woke = np.int64(woken[_mark(cy, cx)])
             woken[_mark(cy, cx)] = woke
+            if stir_x0 <= stir_x1:  # and stir the chunks of the cells within two cells of the other
+                _wake(
+                    woken,
+                    stirred,
+                    True,
+                    max(stir_x0 - WAKE_MARGIN, 0),
+                    max(stir_y0 - WAKE_MARGIN, 0),
+                    min(stir_x1 + WAKE_MARGIN, width - 1),
+                    min(stir_y1 + WAKE_MARGIN, height - 1),
+                )
 
 
 @njit(cache=True)
