@@ -147,6 +147,30 @@ def test_gif_palette_colours_are_made_distinct_invisibly():
     assert all(max(abs(a - b) for a, b in zip(t, (10, 10, 10))) <= 1 for t in triples[:5])
 
 
+def test_gif_stores_what_changed_and_shows_a_repeated_picture_longer(tmp_path):
+    from PIL import Image, ImageSequence
+
+    from sandmod.plugins.gif import MAX_DELAY_MS, changes, distinct_colours, write_gif
+
+    palette = distinct_colours(bytes(range(256)) * 3)
+    first = np.zeros((6, 8), np.uint8)
+    second = first.copy()
+    second[2:4, 5] = 7  # a 1 x 2 box at (5, 2)
+    frames = [first, first.copy(), second, second.copy(), second.copy()]
+    stored = [(box.shape, x, y, ms) for box, x, y, ms in changes(frames, 40)]
+    assert stored == [((6, 8), 0, 0, 80), ((2, 1), 5, 2, 120)]
+    assert [ms for *_, ms in changes([first] * 3, MAX_DELAY_MS // 2 + 10)] == [MAX_DELAY_MS // 2 + 10] * 3  # none over the most
+    out = tmp_path / "m.gif"
+    with open(out, "wb") as f:
+        write_gif(f, frames, palette, 40, 2)
+    with Image.open(out) as im:
+        assert (im.size, im.info["loop"]) == ((8, 6), 2)
+        pictures = [(np.asarray(f.convert("RGB")).copy(), f.info["duration"]) for f in ImageSequence.Iterator(im)]
+    assert [ms for _, ms in pictures] == [80, 120]
+    colours = np.frombuffer(palette, np.uint8).reshape(256, 3)
+    assert (pictures[0][0] == colours[first]).all() and (pictures[1][0] == colours[second]).all()
+
+
 def test_a_finished_render_gets_ordinary_file_permissions(tmp_path, ruleset):
     import os
 
