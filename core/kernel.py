@@ -241,6 +241,12 @@ def _covers(mark, row):
     return mark == WHOLE or (mark != 0 and _first_row(mark) <= row <= _last_row(mark))
 
 
+@njit(cache=True)
+def _grown(x0, y0, x1, y1, width, height):
+    """The cells x0..x1, y0..y1 and those within WAKE_MARGIN of them, in the world (inclusive)."""
+    return max(x0 - WAKE_MARGIN, 0), max(y0 - WAKE_MARGIN, 0), min(x1 + WAKE_MARGIN, width - 1), min(y1 + WAKE_MARGIN, height - 1)
+
+
 @njit(inline="always", cache=True)  # it takes arrays: called, it made its callers count references to all of theirs
 def _wake(woken, stirred, stir, x0, y0, x1, y1):
     """Mark the cells x0..x1, y0..y1 (in the world, inclusive) in the wake marks of their chunks, and stir those chunks if ``stir``."""
@@ -797,28 +803,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if stir:
                         stir_x0, stir_x1 = min(stir_x0, bx0), max(stir_x1, bx1)
                         stir_y0, stir_y1 = min(stir_y0, by0), max(stir_y1, by1)
-            if busy_x0 <= busy_x1:  # wake every cell within two cells of the box
-                wx0 = max(busy_x0 - WAKE_MARGIN, 0)
-                wy0 = max(busy_y0 - WAKE_MARGIN, 0)
-                wx1 = min(busy_x1 + WAKE_MARGIN, width - 1)
-                wy1 = min(busy_y1 + WAKE_MARGIN, height - 1)
-                if wx0 >> CHUNK_SHIFT == wx1 >> CHUNK_SHIFT and wy0 >> CHUNK_SHIFT == wy1 >> CHUNK_SHIFT:
-                    woke = _widened(woke, wy0 - (cy << CHUNK_SHIFT), wy1 - (cy << CHUNK_SHIFT))  # well inside this chunk
-                else:
-                    woken[_mark(cy, cx)] = woke
-                    _wake(woken, stirred, False, wx0, wy0, wx1, wy1)
-                    woke = np.int64(woken[_mark(cy, cx)])
             woken[_mark(cy, cx)] = woke
+            if busy_x0 <= busy_x1:  # wake every cell within two cells of the box
+                wx0, wy0, wx1, wy1 = _grown(busy_x0, busy_y0, busy_x1, busy_y1, width, height)
+                _wake(woken, stirred, False, wx0, wy0, wx1, wy1)
             if stir_x0 <= stir_x1:  # and stir the chunks of the cells within two cells of the other
-                _wake(
-                    woken,
-                    stirred,
-                    True,
-                    max(stir_x0 - WAKE_MARGIN, 0),
-                    max(stir_y0 - WAKE_MARGIN, 0),
-                    min(stir_x1 + WAKE_MARGIN, width - 1),
-                    min(stir_y1 + WAKE_MARGIN, height - 1),
-                )
+                wx0, wy0, wx1, wy1 = _grown(stir_x0, stir_y0, stir_x1, stir_y1, width, height)
+                _wake(woken, stirred, True, wx0, wy0, wx1, wy1)
 
 
 @njit(cache=True)
