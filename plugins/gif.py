@@ -79,7 +79,7 @@ def write_gif(out: BinaryIO, frames: Sequence[np.ndarray], palette: bytes, delay
     from PIL import GifImagePlugin
 
     height, width = frames[0].shape
-    out.write(b"GIF89a" + struct.pack("<HHBBB", width, height, 0xF7, 0, 0) + palette)  # 0xF7: a table of 256
+    out.write(b"GIF89a" + struct.pack("<HHBBB", width, height, 0xF7, 0, 0) + palette)  # 0xF7: a global table of 256 colours, 8 bits a channel
     if loop is not None:
         out.write(b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", loop) + b"\x00")
     for box, x, y, ms in changes(frames, delay_ms):
