@@ -52,10 +52,10 @@ class Recorder(Protocol):
 
 
 class SavedAtClose:
-    """A recorder for formats pillow writes in one go: it keeps each frame as an image and saves all on close.
+    """A recorder for formats written in one go: it keeps each frame (as an image, by default) and saves all on close.
 
-    Subclasses say how a frame becomes an image (:meth:`convert`) and how the
-    images are saved (:meth:`save`).
+    Subclasses say what is kept of a frame (:meth:`convert`) and how it is
+    all saved (:meth:`save`).
     """
 
     def __init__(self, path: Path, settings: VideoSettings):
