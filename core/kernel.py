@@ -325,9 +325,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
         forward = ((frame + y) & 1) == 0
         for j in range(segments):
             cx = first_cx + (j if forward else segments - 1 - j)
-            woke = np.int64(woken[_mark(cy, cx)])  # this chunk's new mark, kept here while its row is updated
             row = y - (cy << CHUNK_SHIFT)
-            if not (_covers(awake[_at(cy, cx)], row) or _covers(woke, row)):
+            if not (_covers(awake[_at(cy, cx)], row) or _covers(np.int64(woken[_mark(cy, cx)]), row)):
                 continue  # asleep: nothing in this row of the chunk or within two cells of it changed
             if unseen > y - 1:  # the elements of the rows next to this one, across the region and one cell past it
                 present |= _elements_in(cells, max(x0 - 1, 0), max(y - 1, 0), min(x1 + 1, width), min(unseen, y + 2, height))
@@ -803,7 +802,6 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if stir:
                         stir_x0, stir_x1 = min(stir_x0, bx0), max(stir_x1, bx1)
                         stir_y0, stir_y1 = min(stir_y0, by0), max(stir_y1, by1)
-            woken[_mark(cy, cx)] = woke
             if busy_x0 <= busy_x1:  # wake every cell within two cells of the box
                 wx0, wy0, wx1, wy1 = _grown(busy_x0, busy_y0, busy_x1, busy_y1, width, height)
                 _wake(woken, stirred, False, wx0, wy0, wx1, wy1)
