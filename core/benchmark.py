@@ -204,7 +204,7 @@ def _peak_working_set() -> int:
 
 def state_bytes(world: World) -> int:
     """Bytes of everything a world keeps between steps: its cells and its chunks' bookkeeping."""
-    chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations)
+    chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain)
     return sum(a.nbytes for a in world.state) + sum((a if a.base is None else a.base).nbytes for a in chunks)
 
 
@@ -347,7 +347,7 @@ class Turns:
 
 def _arrays(world: World) -> tuple[np.ndarray, ...]:
     """Everything a step reads or writes: the cells' state and the chunks' marks."""
-    return (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations)
+    return (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain)
 
 
 def _saved(world: World) -> list[np.ndarray]:

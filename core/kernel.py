@@ -39,6 +39,14 @@ faster and took a third longer to compile. Only :func:`_wake`, handed
 the chunk marks, is inlined by numba, so that no counting comes with it. The
 per-cell code reads and writes the world's arrays at :func:`_at`, unsigned
 indices, which numba need not wrap around.
+
+That one function holds more values than the CPU has registers, so the
+commonest cells (those that stay put, and a straight fall into a fluid) can
+also go through a small loop of their own first, compiled as a second
+version of :func:`step_region`. It pays where most cells are such (sand
+sinking through water), and costs where most are not (cells in flight),
+since each cell it hands on to the full update reloads that update's values;
+each tile takes it while it pays, and the frames are the same either way.
 """
 
 from __future__ import annotations
@@ -121,6 +129,8 @@ SALT_FIRE = 0x61C88647
 LINE_CELLS = CACHE_LINE // 4  # cells in a cache line of the widest array (heat, 4 bytes): a row's lines are asked for this far apart
 CACHED_CELLS = 1 << 16  # a world of no more cells (about a megabyte of state) stays in the CPU's cache: nothing to prefetch
 EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
+HANDED_ON_COST = 4  # step_region's fast loop pays where it hands on fewer than one in this many cells of the rows it updates
+FAST_TRIAL = 8  # a tile whose fast loop did not pay tries it again every this many frames (a power of two)
 
 
 @njit(cache=True)
@@ -205,6 +215,17 @@ def _cooling_loss(energy, cap, cooling, ambient):
 
 
 @njit(cache=True)
+def _stirs(heat_a, cap_a, cooling_a, heat_b, cap_b, cooling_b, ambient):
+    """Does a swap of cells a and b change the heat field? Not where two cells of one temperature
+    trade places and neither cools (see :func:`conduct`)."""
+    return (
+        heat_a * cap_b != heat_b * cap_a
+        or _cooling_loss(heat_a, cap_a, cooling_a, ambient) != 0
+        or _cooling_loss(heat_b, cap_b, cooling_b, ambient) != 0
+    )
+
+
+@njit(cache=True)
 def _fluid_move_cell(x, y, g, k):
     """The first cell of a liquid's or gas's move k (0: on, 1 and 2: on and to a side, 3 and 4: to a side)."""
     return x + (0, 1, -1, 1, -1)[k], y + (g if k < 3 else 0)
@@ -275,7 +296,7 @@ def _elements_in(cells, x0, y0, x1, y1):
 
 
 @njit(cache=True)
-def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present):
+def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, fast):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
     A row of a chunk is updated when the chunk's mark in ``awake`` (from last
@@ -296,6 +317,17 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     one next to it. A cell whose partners, or whose fluid moves' elements, are
     not in the mask skips looking at its neighbours for them (in a world of
     sand and water, every cell does).
+
+    With ``fast`` (a literal: each value is compiled on its own), the cells
+    are taken first by a loop of their own that keeps few values, so that
+    they stay in registers: cells that stay put (a resting fluid that nothing
+    it could displace is next to, a resting grain, a static cell) and a
+    straight fall into a fluid below that knocks nothing loose. Each cell
+    that needs more gets the full update, which the fast loop then resumes
+    after: the same frames either way, but each cell handed on costs the
+    full update's values reloaded. Returns how well the fast loop did: the
+    cells of the rows updated, less HANDED_ON_COST for each one it handed on
+    (above zero: it paid); without ``fast``, 0.
     """
     cells, shade, timer, flags, vx, vy, carry, heat = s.cells, s.shade, s.timer, s.flags, s.vx, s.vy, s.carry, s.heat
     height, width = cells.shape
@@ -317,6 +349,9 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
     present = also_present
+    numba.literally(fast)  # two versions, compiled apart: with and without the fast loop
+    visited = 0  # cells of the rows updated, and how many of them the fast loop handed on to the full update
+    handed_on = 0
     far = height * width > CACHED_CELLS  # prefetch rows ahead (see below)
     unseen = y1 + 1  # rows from here up are not in `present` yet (rows from here down to the next row to update are)
 
@@ -351,181 +386,266 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             # waking and stirring, which changes nothing but the work.
             busy_x0, busy_x1, busy_y0, busy_y1 = sx1, sx0 - 1, y, y
             stir_x0, stir_x1, stir_y0, stir_y1 = sx1, sx0 - 1, y, y
-            for i in range(sx1 - sx0):
-                x = sx0 + i if forward else sx1 - 1 - i
-                e = cells[_at(y, x)]
-                if e == 0 or (flags[_at(y, x)] & DONE) != 0:
-                    continue
+            count = sx1 - sx0
+            visited += count
+            resume = 0  # the fast loop has done the cells before this one
+            for i in range(count):
+                if fast:
+                    # The common cases first, in a loop of their own that holds few values (registers, not the
+                    # stack): cells at rest that nothing around them can move, and a straight fall into a fluid.
+                    # The first cell that needs more gets the full update below; the loop goes on after it.
+                    if i < resume:
+                        continue
+                    n = i
+                    while n < count:
+                        x = sx0 + n if forward else sx1 - 1 - n
+                        e = cells[_at(y, x)]
+                        f = flags[_at(y, x)]
+                        if e == 0 or (f & DONE) != 0:
+                            n += 1
+                            continue
+                        ready = False  # moving, or not calm, or a lifetime, or a partner near: the full update
+                        if vx[_at(y, x)] != 0 or vy[_at(y, x)] != 0 or (f & BURNING) != 0 or life_frames[e] != 0 or (reactive[e] & present) != 0:
+                            break
+                        th = thermal[e]
+                        if th != 0 and ((th & (FLAMMABLE | IGNITES)) != 0 or not (cold_limit[e] <= heat[_at(y, x)] <= hot_limit[e])):
+                            break
+                        ready = True  # only the move is left to decide
+                        kind = archetype[e]
+                        if kind == LIQUID or kind == GAS:
+                            if (displaces[e] & present) != 0:
+                                g = fall_dir[e]
+                                near = 0
+                                for k in range(5):
+                                    nx, ny = _fluid_move_cell(x, y, g, k)
+                                    if _inside(nx, ny, width, height):
+                                        near |= _bit(cells[_at(ny, nx)])
+                                if (displaces[e] & near) != 0:
+                                    break  # it may displace something next to it
+                            n += 1  # at rest, with nothing it could displace where it could go: stays put
+                            continue
+                        if kind == STATIC:
+                            n += 1
+                            continue
+                        if kind != POWDER:
+                            break  # a particle
+                        g = fall_dir[e]
+                        ty = y + g
+                        below = 0
+                        opens = False
+                        if _within(ty, height):
+                            below = cells[_at(ty, x)]
+                            opens = _enterable(displace[e, below], below, flags[_at(ty, x)])
+                        if not opens:
+                            if (f & LOOSE) != 0:
+                                break  # on the ground, and loose: it may roll or slide
+                            n += 1  # at rest on the ground: stays put
+                            continue
+                        if below == 0 or not (0 < x and x + 1 < width and 0 < y):
+                            break  # falling through empty cells, or at the world's edge
+                        if (flags[_at(y, x - 1)] & flags[_at(y, x + 1)] & flags[_at(y - 1, x - 1)] & flags[_at(y - 1, x + 1)] & flags[_at(ty, x - 1)] & flags[_at(ty, x + 1)] & LOOSE) == 0:
+                            break  # it may knock a resting grain loose
+                        # Straight into a fluid: one cell, its speed lost, nothing knocked.
+                        stirs = _stirs(int(heat[_at(y, x)]), heat_cap[e], cooling[e], int(heat[_at(ty, x)]), heat_cap[below], cooling[below], ambient)
+                        cells[_at(y, x)] = below
+                        cells[_at(ty, x)] = e
+                        shade[_at(y, x)], shade[_at(ty, x)] = shade[_at(ty, x)], shade[_at(y, x)]
+                        timer[_at(y, x)], timer[_at(ty, x)] = timer[_at(ty, x)], timer[_at(y, x)]
+                        heat[_at(y, x)], heat[_at(ty, x)] = heat[_at(ty, x)], heat[_at(y, x)]
+                        vx[_at(y, x)] = vx[_at(ty, x)]
+                        vy[_at(y, x)] = vy[_at(ty, x)]
+                        flags[_at(y, x)] = MOVED | (flags[_at(ty, x)] & KEPT)
+                        vx[_at(ty, x)] = 0
+                        vy[_at(ty, x)] = 0
+                        flags[_at(ty, x)] = MOVED | LOOSE | (f & (BURNING | SCORCHED))
+                        lo, hi = min(y, ty), max(y, ty)
+                        busy_x0, busy_x1 = min(busy_x0, x), max(busy_x1, x)
+                        busy_y0, busy_y1 = min(busy_y0, lo), max(busy_y1, hi)
+                        if stirs:
+                            stir_x0, stir_x1 = min(stir_x0, x), max(stir_x1, x)
+                            stir_y0, stir_y1 = min(stir_y0, lo), max(stir_y1, hi)
+                        n += 1
+                    if n == count:
+                        break
+                    resume = n + 1
+                    handed_on += 1
+                else:
+                    x = sx0 + i if forward else sx1 - 1 - i
+                    e = cells[_at(y, x)]
+                    if e == 0 or (flags[_at(y, x)] & DONE) != 0:
+                        continue
+                    ready = False
                 busy = False  # did anything change, or might it on a later frame?
                 stir = False  # did an element or a heat change (besides even swaps)?
                 bx0 = bx1 = x  # the cells it moved between
                 by0 = by1 = y
                 for _ in range(1):  # one pass; `break` ends the cell's update
-                    # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
-                    f = flags[_at(y, x)]
-                    th = thermal[e]
-                    # Calm (the common case): not burning, no flame, its heat between its phase changes.
-                    calm = (f & BURNING) == 0 and (
-                        th == 0 or ((th & (FLAMMABLE | IGNITES)) == 0 and cold_limit[e] <= heat[_at(y, x)] <= hot_limit[e])
-                    )
-                    if not calm:
-                        energy = int(heat[_at(y, x)])
-                        into = e
-                        if energy > hot_limit[e]:
-                            into = heated_into[e]
-                        elif energy < cold_limit[e]:
-                            into = cooled_into[e]
-                        elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
-                            f |= BURNING
-                            timer[_at(y, x)] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
-                        lit = into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0)
-                        fh = _cell_key(fire_key ^ 0x5BD1E995, x, y) if lit else 0  # rolls for fire, only where there is fire
-                        if into == e and (f & BURNING) != 0:
-                            busy = True
-                            if (th & EXPLOSIVE) != 0:
-                                # It goes off: frozen for the rest of the frame, then the step's blasts are applied.
-                                flags[_at(y, x)] = f | DETONATING | DONE
-                                detonations[tile] += 1
-                                break
-                            else:
-                                out = False
+                    if not ready:  # steps 1 to 3 have work to do (the fast loop found so)
+                        # 1. Heat and fire: phase changes, catching fire, burning, lighting neighbours.
+                        f = flags[_at(y, x)]
+                        th = thermal[e]
+                        # Calm (the common case): not burning, no flame, its heat between its phase changes.
+                        calm = (f & BURNING) == 0 and (
+                            th == 0 or ((th & (FLAMMABLE | IGNITES)) == 0 and cold_limit[e] <= heat[_at(y, x)] <= hot_limit[e])
+                        )
+                        if not calm:
+                            energy = int(heat[_at(y, x)])
+                            into = e
+                            if energy > hot_limit[e]:
+                                into = heated_into[e]
+                            elif energy < cold_limit[e]:
+                                into = cooled_into[e]
+                            elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= ignite_limit[e]:
+                                f |= BURNING
+                                timer[_at(y, x)] = burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (burn_jitter[e] + 1)
+                            lit = into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0)
+                            fh = _cell_key(fire_key ^ 0x5BD1E995, x, y) if lit else 0  # rolls for fire, only where there is fire
+                            if into == e and (f & BURNING) != 0:
+                                busy = True
+                                if (th & EXPLOSIVE) != 0:
+                                    # It goes off: frozen for the rest of the frame, then the step's blasts are applied.
+                                    flags[_at(y, x)] = f | DETONATING | DONE
+                                    detonations[tile] += 1
+                                    break
+                                else:
+                                    out = False
+                                    for k in range(4):
+                                        nx = x + (1, 0, -1, 0)[k]
+                                        ny = y + (0, 1, 0, -1)[k]
+                                        if _inside(nx, ny, width, height) and extinguishes[cells[_at(ny, nx)]] != 0:
+                                            out = True
+                                    if out:  # put out, and cooled to just below catching fire again
+                                        f &= ~BURNING
+                                        energy = min(energy, ignite_limit[e] - heat_cap[e] * TEMP_ONE)
+                                    else:
+                                        if energy < burn_limit[e]:
+                                            energy = min(energy + burn_heat[e], burn_limit[e])
+                                        left = timer[_at(y, x)]
+                                        if left <= 1:  # burnt out
+                                            into = ash[e] if ((fh >> 8) & 0xFFFFFF) < ash_chance[e] else 0
+                                        else:
+                                            timer[_at(y, x)] = left - 1
+                                            d = fh & 3
+                                            nx = x + (1, 0, -1, 0)[d]
+                                            ny = y + (0, 1, 0, -1)[d]
+                                            product = flame[e]
+                                            if product != 0 and _inside(nx, ny, width, height) and cells[_at(ny, nx)] == 0:
+                                                if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
+                                                    cells[_at(ny, nx)] = product
+                                                    present |= _bit(product)
+                                                    stir = True
+                                                    shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(
+                                                        _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
+                                                    )
+                                                    vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
+                                                    heat[_at(ny, nx)] = _energy(temp_start[product], heat_cap[product])
+                                                    flags[_at(ny, nx)] = MOVED | LOOSE
+                            if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
+                                # A flame lights the flammable cells it touches, each by its own chance.
                                 for k in range(4):
                                     nx = x + (1, 0, -1, 0)[k]
                                     ny = y + (0, 1, 0, -1)[k]
-                                    if _inside(nx, ny, width, height) and extinguishes[cells[_at(ny, nx)]] != 0:
-                                        out = True
-                                if out:  # put out, and cooled to just below catching fire again
-                                    f &= ~BURNING
-                                    energy = min(energy, ignite_limit[e] - heat_cap[e] * TEMP_ONE)
-                                else:
-                                    if energy < burn_limit[e]:
-                                        energy = min(energy + burn_heat[e], burn_limit[e])
-                                    left = timer[_at(y, x)]
-                                    if left <= 1:  # burnt out
-                                        into = ash[e] if ((fh >> 8) & 0xFFFFFF) < ash_chance[e] else 0
-                                    else:
-                                        timer[_at(y, x)] = left - 1
-                                        d = fh & 3
-                                        nx = x + (1, 0, -1, 0)[d]
-                                        ny = y + (0, 1, 0, -1)[d]
-                                        product = flame[e]
-                                        if product != 0 and _inside(nx, ny, width, height) and cells[_at(ny, nx)] == 0:
-                                            if (_cell_key(fire_key ^ 0x68E31DA4, x, y) >> 8) < flame_chance[e]:
-                                                cells[_at(ny, nx)] = product
-                                                present |= _bit(product)
-                                                stir = True
-                                                shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(
-                                                    _cell_key(spawn_key, nx, ny), life_frames[product], life_jitter[product]
-                                                )
-                                                vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
-                                                heat[_at(ny, nx)] = _energy(temp_start[product], heat_cap[product])
-                                                flags[_at(ny, nx)] = MOVED | LOOSE
-                        if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
-                            # A flame lights the flammable cells it touches, each by its own chance.
-                            for k in range(4):
-                                nx = x + (1, 0, -1, 0)[k]
-                                ny = y + (0, 1, 0, -1)[k]
-                                if not _inside(nx, ny, width, height):
-                                    continue
-                                n = cells[_at(ny, nx)]
-                                if (thermal[n] & FLAMMABLE) != 0 and (flags[_at(ny, nx)] & BURNING) == 0:
-                                    busy = True  # lit now, or maybe on a later frame
-                                    if (_mix32(fh ^ (k + 1) * 0x9E3779B9) >> 8) < catch_chance[n]:
-                                        flags[_at(ny, nx)] |= BURNING
-                                        timer[_at(ny, nx)] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
-                        if into != e:
-                            busy = stir = True
-                            cells[_at(y, x)] = into
-                            present |= _bit(into)
-                            shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
-                            vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
-                            heat[_at(y, x)] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
-                            flags[_at(y, x)] = (f & FRESH) | MOVED
-                            break
-                        if energy != heat[_at(y, x)]:
-                            heat[_at(y, x)] = energy
-                            busy = stir = True
-                        if f != flags[_at(y, x)]:
-                            flags[_at(y, x)] = f
-                            busy = True
-
-                    # 2. Lifetime: count down, and at zero become another element (not while burning).
-                    if life_frames[e] != 0 and (f & BURNING) == 0:
-                        busy = True
-                        left = timer[_at(y, x)]
-                        if left <= 1:
-                            into = life_into[e]
-                            cells[_at(y, x)] = into
-                            present |= _bit(into)
-                            stir = True
-                            shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
-                            vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
-                            heat[_at(y, x)] = _energy(_temperature(int(heat[_at(y, x)]), heat_recip[e]), heat_cap[into])
-                            flags[_at(y, x)] = (flags[_at(y, x)] & FRESH) | MOVED
-                            break
-                        timer[_at(y, x)] = left - 1
-
-                    # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
-                    # test: does any neighbour's bit show in the element's partner mask?
-                    partners = reactive[e] & present
-                    if partners != 0:
-                        near = 0
-                        if x + 1 < width:
-                            near |= _bit(cells[_at(y, x + 1)])
-                        if y + 1 < height:
-                            near |= _bit(cells[_at(y + 1, x)])
-                        if x > 0:
-                            near |= _bit(cells[_at(y, x - 1)])
-                        if y > 0:
-                            near |= _bit(cells[_at(y - 1, x)])
-                        partners &= near
-                    if partners != 0:
-                        reacted = False
-                        start = (_cell_key(move_key, x, y) >> 1) & 3
-                        for k in range(4):
-                            d = (start + k) & 3
-                            nx = x + (1, 0, -1, 0)[d]
-                            ny = y + (0, 1, 0, -1)[d]
-                            if not _inside(nx, ny, width, height) or (flags[_at(ny, nx)] & REACTED) != 0:
-                                continue
-                            b = cells[_at(ny, nx)]
-                            threshold = react_chance[e, b]
-                            if threshold == 0:
-                                continue
-                            # One roll per touching pair and frame, the same whichever cell looks.
-                            roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
-                            ta = _temperature(int(heat[_at(y, x)]), heat_recip[e])
-                            tb = _temperature(int(heat[_at(ny, nx)]), heat_recip[b])
-                            if ta + tb < react_tsum_min[e, b] or ta + tb > react_tsum_max[e, b]:
-                                continue
-                            busy = True  # it reacts now, or may on a later frame
-                            if roll >= threshold:
-                                continue
-                            into_a = react_into_a[e, b]
-                            into_b = react_into_b[e, b]
-                            warm = react_heat[e, b]
-                            if into_a != e:
-                                cells[_at(y, x)] = into_a
-                                present |= _bit(into_a)
-                                stir = True
-                                shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
+                                    if not _inside(nx, ny, width, height):
+                                        continue
+                                    n = cells[_at(ny, nx)]
+                                    if (thermal[n] & FLAMMABLE) != 0 and (flags[_at(ny, nx)] & BURNING) == 0:
+                                        busy = True  # lit now, or maybe on a later frame
+                                        if (_mix32(fh ^ (k + 1) * 0x9E3779B9) >> 8) < catch_chance[n]:
+                                            flags[_at(ny, nx)] |= BURNING
+                                            timer[_at(ny, nx)] = burn_frames[n] + (_cell_key(fire_key, nx, ny) >> 8) % (burn_jitter[n] + 1)
+                            if into != e:
+                                busy = stir = True
+                                cells[_at(y, x)] = into
+                                present |= _bit(into)
+                                shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
                                 vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
-                                heat[_at(y, x)] = _energy(ta + warm, heat_cap[into_a])
-                                flags[_at(y, x)] &= FRESH
-                            if into_b != b:
-                                cells[_at(ny, nx)] = into_b
-                                present |= _bit(into_b)
+                                heat[_at(y, x)] = _energy(_temperature(energy, heat_recip[e]), heat_cap[into])
+                                flags[_at(y, x)] = (f & FRESH) | MOVED
+                                break
+                            if energy != heat[_at(y, x)]:
+                                heat[_at(y, x)] = energy
+                                busy = stir = True
+                            if f != flags[_at(y, x)]:
+                                flags[_at(y, x)] = f
+                                busy = True
+
+                        # 2. Lifetime: count down, and at zero become another element (not while burning).
+                        if life_frames[e] != 0 and (f & BURNING) == 0:
+                            busy = True
+                            left = timer[_at(y, x)]
+                            if left <= 1:
+                                into = life_into[e]
+                                cells[_at(y, x)] = into
+                                present |= _bit(into)
                                 stir = True
-                                shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
-                                vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
-                                heat[_at(ny, nx)] = _energy(tb + warm, heat_cap[into_b])
-                                flags[_at(ny, nx)] &= FRESH
-                            flags[_at(y, x)] |= REACTED
-                            flags[_at(ny, nx)] |= REACTED
-                            reacted = True
-                            break
-                        if reacted:
-                            break
+                                shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into], life_jitter[into])
+                                vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
+                                heat[_at(y, x)] = _energy(_temperature(int(heat[_at(y, x)]), heat_recip[e]), heat_cap[into])
+                                flags[_at(y, x)] = (flags[_at(y, x)] & FRESH) | MOVED
+                                break
+                            timer[_at(y, x)] = left - 1
+
+                        # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
+                        # test: does any neighbour's bit show in the element's partner mask?
+                        partners = reactive[e] & present
+                        if partners != 0:
+                            near = 0
+                            if x + 1 < width:
+                                near |= _bit(cells[_at(y, x + 1)])
+                            if y + 1 < height:
+                                near |= _bit(cells[_at(y + 1, x)])
+                            if x > 0:
+                                near |= _bit(cells[_at(y, x - 1)])
+                            if y > 0:
+                                near |= _bit(cells[_at(y - 1, x)])
+                            partners &= near
+                        if partners != 0:
+                            reacted = False
+                            start = (_cell_key(move_key, x, y) >> 1) & 3
+                            for k in range(4):
+                                d = (start + k) & 3
+                                nx = x + (1, 0, -1, 0)[d]
+                                ny = y + (0, 1, 0, -1)[d]
+                                if not _inside(nx, ny, width, height) or (flags[_at(ny, nx)] & REACTED) != 0:
+                                    continue
+                                b = cells[_at(ny, nx)]
+                                threshold = react_chance[e, b]
+                                if threshold == 0:
+                                    continue
+                                # One roll per touching pair and frame, the same whichever cell looks.
+                                roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
+                                ta = _temperature(int(heat[_at(y, x)]), heat_recip[e])
+                                tb = _temperature(int(heat[_at(ny, nx)]), heat_recip[b])
+                                if ta + tb < react_tsum_min[e, b] or ta + tb > react_tsum_max[e, b]:
+                                    continue
+                                busy = True  # it reacts now, or may on a later frame
+                                if roll >= threshold:
+                                    continue
+                                into_a = react_into_a[e, b]
+                                into_b = react_into_b[e, b]
+                                warm = react_heat[e, b]
+                                if into_a != e:
+                                    cells[_at(y, x)] = into_a
+                                    present |= _bit(into_a)
+                                    stir = True
+                                    shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
+                                    vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
+                                    heat[_at(y, x)] = _energy(ta + warm, heat_cap[into_a])
+                                    flags[_at(y, x)] &= FRESH
+                                if into_b != b:
+                                    cells[_at(ny, nx)] = into_b
+                                    present |= _bit(into_b)
+                                    stir = True
+                                    shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
+                                    vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
+                                    heat[_at(ny, nx)] = _energy(tb + warm, heat_cap[into_b])
+                                    flags[_at(ny, nx)] &= FRESH
+                                flags[_at(y, x)] |= REACTED
+                                flags[_at(ny, nx)] |= REACTED
+                                reacted = True
+                                break
+                            if reacted:
+                                break
 
                     # 4. Movement: choose up to four moves to try in order, then walk them.
                     kind = archetype[e]
@@ -724,12 +844,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     marks = flags[_at(y, x)] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
                     if px != x or py != y:
                         # Heat stays even where two cells of one temperature trade places and neither cools.
-                        stir = (
-                            stir
-                            or heat[_at(y, x)] * heat_cap[entered] != heat[_at(py, px)] * heat_cap[e]
-                            or _cooling_loss(int(heat[_at(y, x)]), heat_cap[e], cooling[e], ambient) != 0
-                            or _cooling_loss(int(heat[_at(py, px)]), heat_cap[entered], cooling[entered], ambient) != 0
-                        )
+                        stir = stir or _stirs(int(heat[_at(y, x)]), heat_cap[e], cooling[e], int(heat[_at(py, px)]), heat_cap[entered], cooling[entered], ambient)
                         cells[_at(y, x)] = entered
                         cells[_at(py, px)] = e
                         shade[_at(y, x)], shade[_at(py, px)] = shade[_at(py, px)], shade[_at(y, x)]
@@ -808,6 +923,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             if stir_x0 <= stir_x1:  # and stir the chunks of the cells within two cells of the other
                 wx0, wy0, wx1, wy1 = _grown(stir_x0, stir_y0, stir_x1, stir_y1, width, height)
                 _wake(woken, stirred, True, wx0, wy0, wx1, wy1)
+    return visited - HANDED_ON_COST * handed_on if fast else 0
 
 
 @njit(cache=True)
@@ -921,8 +1037,9 @@ def clear_marks(flags, awake):
 
 
 @njit(cache=True, parallel=True)
-def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present):
-    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one thread per tile at a time."""
+def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
+    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one thread per tile at a time,
+    each with or without :func:`step_region`'s fast loop (see :func:`step`)."""
     height, width = s.cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
     for k in prange(count):
@@ -932,11 +1049,14 @@ def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
         x1 = min(x0 + TILE, width)
         y1 = min(y0 + TILE, height)
         conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
-        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present)
+        if route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0)):
+            fast_gain[tile] = step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, True)
+        else:
+            step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
 
 
 @njit(cache=True)
-def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present):
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route):
     """Advance the world by one frame; returns how many explosives went off (see :func:`take_detonations`).
 
     The world is cut into tiles of 2 x 2 chunks, updated in four passes by
@@ -949,7 +1069,11 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     needs no sweep (see :func:`conduct`). ``hands``, the number of threads,
     only decides which thread takes which tile. ``also_present`` is 0, or -1
     to look at the neighbours of every cell for partners (see
-    :func:`step_region`): tests compare the two.
+    :func:`step_region`): tests compare the two. ``fast_gain`` holds, per
+    tile, how well :func:`step_region`'s fast loop did the last time the
+    tile took it: a tile takes it while it pays, and tries it again every
+    FAST_TRIAL frames when it did not. ``route`` 1 sends every tile through
+    the fast loop and -1 none (tests compare them); 0 chooses so.
     """
     flags = s.flags
     height, width = flags.shape
@@ -985,7 +1109,7 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
             for k in range(hand, count, hands):
                 order[dealt] = todo[k]
                 dealt += 1
-        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present)
+        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
     for cy in range(chunks_y):
         for cx in range(chunks_x):
             awake[cy, cx] = woken[cy, cx, 0]

@@ -223,7 +223,9 @@ class World:
         self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
         self._stirred = _on_own_lines(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
         self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step
+        self._fast_gain = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile: did the kernel's fast loop pay?
         self._also_present = 0  # -1: the kernel looks for partners next to every cell, none skipped (for tests)
+        self._fast_route = 0  # 1: every tile through the kernel's fast loop, -1: none (for tests); 0: as it pays
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
@@ -431,6 +433,8 @@ class World:
             self._detonations,
             get_num_threads(),
             self._also_present,
+            self._fast_gain,
+            self._fast_route,
         )
         if went_off:  # top to bottom, left to right, whichever thread found them
             self._explode(kernel.take_detonations(self.state, self.tables, self._detonations), 0)

@@ -84,15 +84,16 @@ def test_a_hot_grain_falling_through_even_air_warms_it_on_its_way(ruleset):
     assert skipping._temperature_units()[70:100].max() > skipping._temperature_units()[0, 0]  # and warmed the air there
 
 
-def stepped_both_ways(world_of, frames):
-    """Step two copies of a world, one skipping absent partners (see kernel.step_region), one looking
-    next to every cell; returns the frame at which they first differ (None: never)."""
-    skipping, looking = world_of(), world_of()
-    looking._also_present = -1
+def stepped_both_ways(world_of, frames, other=lambda world: setattr(world, "_also_present", -1)):
+    """Step two copies of a world, one as it is and one changed by ``other`` (by default: looking for
+    partners next to every cell instead of skipping absent ones, see kernel.step_region); returns the
+    frame at which they first differ (None: never)."""
+    plain, changed = world_of(), world_of()
+    other(changed)
     for frame in range(frames):
-        skipping.step()
-        looking.step()
-        if digest(skipping) != digest(looking):
+        plain.step()
+        changed.step()
+        if digest(plain) != digest(changed):
             return frame
     return None
 
@@ -109,6 +110,45 @@ def random_world(ruleset, seed, size=40):
         world.paint(pick == len(kinds), int(kinds[0]))  # full: not one empty cell
     world.set_temperature(r.random((size, size)) < 0.3, float(r.choice([-50, 20, 150, 500, 1500])))
     return world
+
+
+def routed(fast):
+    """Set a world to update every tile through the kernel's fast loop (True) or none (False)."""
+
+    def route(world):
+        world._fast_route = 1 if fast else -1
+
+    return route
+
+
+def test_the_fast_loop_changes_nothing(ruleset):
+    # The fast loop's cases (resting cells, a straight fall into a fluid) done by the full update instead.
+    def full(world_of):
+        def make():
+            world = world_of()
+            routed(False)(world)
+            return world
+
+        return make
+
+    differ = [(seed, stepped_both_ways(full(lambda: random_world(ruleset, seed)), 40, routed(True))) for seed in range(120)]
+    assert [(seed, frame) for seed, frame in differ if frame is not None] == []
+    for scene in ("halves", "mix", "everything", "settled"):
+        assert stepped_both_ways(full(benchmark.scene_bench(ruleset, scene, 128, seed=3).make), 150, routed(True)) is None, scene
+    for name in ("hourglass", "boiling_pool", "fountain", "tall_drop"):
+        assert stepped_both_ways(full(lambda: load_world(EXAMPLES / f"{name}.toml").world), 200, routed(True)) is None, name
+
+
+def test_each_tile_takes_the_fast_loop_where_it_pays(ruleset):
+    # Sand sinking through water is nearly all resting water and straight falls; mix's first frames
+    # are nearly all cells in flight, which the fast loop hands on to the full update.
+    halves, mix = (benchmark.scene_bench(ruleset, scene, 256).make() for scene in ("halves", "mix"))
+    for _ in range(130):
+        halves.step()
+    for _ in range(10):
+        mix.step()
+    assert (halves._fast_gain > 0).mean() > 0.5
+    assert (mix._fast_gain < 0).mean() > 0.9  # every tile has tried it by frame 8
 
 
 def test_skipping_absent_partners_changes_nothing(ruleset):
@@ -264,7 +304,7 @@ def test_the_marks_threads_write_lie_on_cache_lines_of_their_own(ruleset):
 def test_worlds_of_every_size_give_the_kernel_the_same_types(ruleset, size):
     """Numba compiles the kernel anew for each set of argument types (about a minute): a world of one
     chunk must not need a compile of its own after a render of a larger one, or the other way round."""
-    typed = lambda world: [numba.typeof(a) for a in (world.state, world.tables, world.awake, world._woken, world._even, world._stirred, world._detonations)]
+    typed = lambda world: [numba.typeof(a) for a in (world.state, world.tables, world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain)]
     assert typed(World(ruleset, *size)) == typed(World(ruleset, 100, 70))
 
 
@@ -275,6 +315,6 @@ def test_step_calls_the_kernels_with_plain_numbers_not_literal_ones(ruleset):
 
     world = World(ruleset, 100, 70)
     step = numba.njit(kernel.step.py_func)  # typed here, so the kernels it calls are looked up (in the cache) again
-    step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0)
+    step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0, world._fast_gain, 0)
     for called in (kernel.update_tiles, kernel.clear_marks):
         assert called.signatures and not any("Literal" in str(sig) for sig in called.signatures), called
