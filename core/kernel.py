@@ -214,7 +214,7 @@ def _cooling_loss(energy, cap, cooling, ambient):
     return _scaled(_energy(ambient, cap) - energy, cooling) if cooling != 0 else 0
 
 
-@njit(cache=True)
+@njit(inline="always", cache=True)
 def _stirs(heat_a, cap_a, cooling_a, heat_b, cap_b, cooling_b, ambient):
     """Does a swap of cells a and b change the heat field? Not where two cells of one temperature
     trade places and neither cools (see :func:`conduct`)."""
