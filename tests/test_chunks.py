@@ -84,12 +84,13 @@ def test_a_hot_grain_falling_through_even_air_warms_it_on_its_way(ruleset):
     assert skipping._temperature_units()[70:100].max() > skipping._temperature_units()[0, 0]  # and warmed the air there
 
 
-def stepped_both_ways(world_of, frames, other=lambda world: setattr(world, "_also_present", -1)):
-    """Step two copies of a world, one as it is and one changed by ``other`` (by default: looking for
-    partners next to every cell instead of skipping absent ones, see kernel.step_region); returns the
-    frame at which they first differ (None: never)."""
+def stepped_both_ways(world_of, frames, switch="_also_present", values=(0, -1)):
+    """Step two copies of a world with one of the kernel's test switches set to each of ``values``
+    (by default: skipping absent partners, and looking next to every cell, see kernel.step_region);
+    returns the frame at which they first differ (None: never)."""
     plain, changed = world_of(), world_of()
-    other(changed)
+    setattr(plain, switch, values[0])
+    setattr(changed, switch, values[1])
     for frame in range(frames):
         plain.step()
         changed.step()
@@ -112,31 +113,16 @@ def random_world(ruleset, seed, size=40):
     return world
 
 
-def routed(fast):
-    """Set a world to update every tile through the kernel's fast loop (True) or none (False)."""
-
-    def route(world):
-        world._fast_route = 1 if fast else -1
-
-    return route
-
-
 def test_the_fast_loop_changes_nothing(ruleset):
-    # The fast loop's cases (resting cells, a straight fall into a fluid) done by the full update instead.
-    def full(world_of):
-        def make():
-            world = world_of()
-            routed(False)(world)
-            return world
-
-        return make
-
-    differ = [(seed, stepped_both_ways(full(lambda: random_world(ruleset, seed)), 40, routed(True))) for seed in range(120)]
+    # The fast loop's cases (resting cells, a straight fall into a fluid) done by the full update instead:
+    # every tile routed through it, against none.
+    both = {"switch": "_fast_route", "values": (-1, 1)}
+    differ = [(seed, stepped_both_ways(lambda: random_world(ruleset, seed), 40, **both)) for seed in range(120)]
     assert [(seed, frame) for seed, frame in differ if frame is not None] == []
     for scene in ("halves", "mix", "everything", "settled"):
-        assert stepped_both_ways(full(benchmark.scene_bench(ruleset, scene, 128, seed=3).make), 150, routed(True)) is None, scene
+        assert stepped_both_ways(benchmark.scene_bench(ruleset, scene, 128, seed=3).make, 150, **both) is None, scene
     for name in ("hourglass", "boiling_pool", "fountain", "tall_drop"):
-        assert stepped_both_ways(full(lambda: load_world(EXAMPLES / f"{name}.toml").world), 200, routed(True)) is None, name
+        assert stepped_both_ways(lambda: load_world(EXAMPLES / f"{name}.toml").world, 200, **both) is None, name
 
 
 def test_each_tile_takes_the_fast_loop_where_it_pays(ruleset):
