@@ -265,6 +265,12 @@ class _OlderKernel:
         return self.module.step(*args)
 
 
+def state_digest(world: World) -> str:
+    """A digest of every cell's state (not the chunks' marks, which one kernel may set wider than another):
+    two runs that end with the same one reached the same frames."""
+    return hashlib.sha1(b"".join(a.tobytes() for a in world.state)).hexdigest()
+
+
 def load_kernel(path) -> ModuleType | _OlderKernel:
     """Another version of ``sandmod/kernel.py`` (say, from ``git show REV:core/kernel.py``), importable
     beside this one; its relative imports name this sandmod's modules. Raises ValueError if it is none."""

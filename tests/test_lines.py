@@ -40,7 +40,7 @@ def test_from_and_min_choose_the_lines_shown():
 
 
 def test_frames_that_differ_from_the_compiled_kernels_are_said_and_exit_1(monkeypatch):
-    monkeypatch.setattr(lines, "_digest", lambda world: "not the child's")  # the parent's, not the child's
+    monkeypatch.setattr(lines.benchmark, "state_digest", lambda world: "not the child's")  # the parent's, not the child's
     code, output = counted(["--scene", "mix", "--size", "32", "--start", "2"])
     assert code == 1
     assert "  OTHER FRAMES than the compiled kernel's: these counts are not the real frames'" in output

@@ -22,7 +22,6 @@ in a cache folder of their own: the first count of a version compiles it
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -125,7 +124,7 @@ def count(what: dict, kernel: str, folder: Path, env: dict[str, str]) -> Count:
     child = [sys.executable, "-m", "sandmod.tools.instructions", "--child", str(job)]
     native = subprocess.run(child, env=env, capture_output=True, text=True)  # compiles, unless cached
     if native.returncode != 0:
-        raise CannotCount(f"the frames did not run: {_last_line(native.stderr)}")
+        raise CannotCount(f"the frames did not run: {last_line(native.stderr)}")
     out = folder / "callgrind.out"
     counted = subprocess.run(
         ["valgrind", "--tool=callgrind", "--instr-atstart=no", "--cache-sim=no", "--branch-sim=yes", f"--callgrind-out-file={out}", *child],
@@ -134,7 +133,7 @@ def count(what: dict, kernel: str, folder: Path, env: dict[str, str]) -> Count:
         text=True,
     )
     if counted.returncode != 0:
-        raise CannotCount(f"valgrind failed: {_last_line(counted.stderr)}")
+        raise CannotCount(f"valgrind failed: {last_line(counted.stderr)}")
     totals = [line for dump in folder.glob("callgrind.out*") for line in dump.read_text().splitlines() if line.startswith("totals:")]
     totals = [t for t in totals if t.split()[1:] != ["0"]]
     if len(totals) != 1:
@@ -144,7 +143,8 @@ def count(what: dict, kernel: str, folder: Path, env: dict[str, str]) -> Count:
     return Count.from_totals(totals[0], counted.stdout.strip().splitlines()[-1])
 
 
-def _last_line(text: str) -> str:
+def last_line(text: str) -> str:
+    """The last line of a child's stderr: what went wrong, for a one-line error."""
     lines = text.strip().splitlines()
     return lines[-1] if lines else "no message"
 
@@ -174,7 +174,7 @@ def _child(job: dict) -> None:
     for _ in range(job["frames"]):
         world.step()
     switch.counting_off()
-    print(hashlib.sha1(b"".join(a.tobytes() for a in world.state)).hexdigest())
+    print(benchmark.state_digest(world))
 
 
 def _line(name: str, c: Count, frames: int, cells: int) -> str:

@@ -27,7 +27,6 @@ at the end. ``_within`` and ``_inside`` become plain comparisons
 from __future__ import annotations
 
 import collections
-import hashlib
 import json
 import os
 import subprocess
@@ -39,16 +38,13 @@ import click
 import numpy as np
 
 from sandmod import benchmark  # numpy, not numba
+from sandmod.tools.instructions import last_line
 
 #: The kernel functions worth counting (the ones a frame spends its time in).
 FUNCTIONS = ("step_region", "conduct", "explode")
 
 #: What a world carries from one frame to the next besides its cells (the rest is scratch).
 _CARRIED = ("awake", "_even", "_fast_gain")
-
-
-def _digest(world) -> str:
-    return hashlib.sha1(b"".join(a.tobytes() for a in world.state)).hexdigest()
 
 
 def _save(world, path: Path) -> None:
@@ -113,7 +109,7 @@ def _child(job: dict) -> None:
     finally:
         sys.settrace(None)
     world.state = type(world.state)(*(array.astype(kind) for array, kind in zip(world.state, kinds)))
-    Path(job["out"]).write_text(json.dumps({"digest": _digest(world), "counts": counts}), encoding="utf-8")
+    Path(job["out"]).write_text(json.dumps({"digest": benchmark.state_digest(world), "counts": counts}), encoding="utf-8")
 
 
 def _report(counts: dict[str, dict[str, int]], source: list[str], first: int, least: int) -> list[str]:
@@ -164,14 +160,13 @@ def main(scene, world, size, start, frames, function, first, least, child) -> No
         env = dict(os.environ, NUMBA_DISABLE_JIT="1")
         ran = subprocess.run([sys.executable, "-m", "sandmod.tools.lines", "--child", str(Path(scratch) / "job.json")], env=env, capture_output=True, text=True)
         if ran.returncode != 0:
-            last = (ran.stderr.strip().splitlines() or ["no message"])[-1]
-            raise click.ClickException(f"the frames did not run as Python: {last}")
+            raise click.ClickException(f"the frames did not run as Python: {last_line(ran.stderr)}")
         result = json.loads(Path(job["out"]).read_text(encoding="utf-8"))
     click.echo(f"{name}, {span}, {function}, the kernel run as Python:")
     source = Path(kernel.__file__).read_text(encoding="utf-8").splitlines()
     for line in _report(result["counts"], source, first, least):
         click.echo("  " + line)
-    if result["digest"] != _digest(native):
+    if result["digest"] != benchmark.state_digest(native):
         click.echo("  OTHER FRAMES than the compiled kernel's: these counts are not the real frames'", err=True)
         sys.exit(1)
     click.echo("  the same frames as the compiled kernel")
