@@ -8,6 +8,7 @@ lists every problem in every file.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -163,11 +164,16 @@ def discover_mods(
     files = [(path, plugin) for folder, plugin in folders for path in sorted(Path(folder).iterdir())]
     files += [(Path(path), "user") for path in extra_files]
     seen: set[Path] = set()
+    copies: set[tuple[str, bytes]] = set()  # (name, digest): a copy of a file read is the same mod, not a rival
     for path, plugin in files:
         loader = registry.mod_loaders.get(path.suffix.lower())
         if loader is None or not path.is_file() or path.resolve() in seen:
             continue
         seen.add(path.resolve())
+        copy = (path.name, hashlib.sha256(path.read_bytes()).digest())
+        if copy in copies:
+            continue  # e.g. a checkout's mods/ beside the same files installed (not editable) as the bundled mods
+        copies.add(copy)
         try:
             add(loader.value(path), plugin)
         except ProblemsError as exc:

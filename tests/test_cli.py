@@ -251,6 +251,22 @@ def test_a_dropped_in_mod_appears_in_list_and_render():
     assert invoke("render", "elsewhere/world.toml", "-o", "g2.gif", "--mods", "elsewhere/mods2").exit_code == 0
 
 
+def test_every_command_reads_the_mods_folder_where_it_runs():
+    # list shows ./mods' elements, so render, validate and bench take them too, wherever the world file is.
+    write_mods(
+        Path("mods"),
+        {"glitter.toml": '[mod]\nname = "glitter"\n[elements.glitter]\narchetype = "powder"\ncolor = "#ff00ff"\nshade = 0.0\ndensity = 1200\n'},
+    )
+    Path("worlds").mkdir()
+    Path("worlds/world.toml").write_text(POURING.format(element="glitter"))
+    assert "glitter:glitter" in {e["id"] for e in json.loads(invoke("list", "--json").stdout)["elements"]}
+    assert invoke("validate", "worlds/world.toml").exit_code == 0
+    result = invoke("render", "worlds/world.toml", "-o", "glitter.gif")
+    assert result.exit_code == 0, result.output
+    assert (255, 0, 255) in palette_colours(Path("glitter.gif"))
+    assert invoke("bench", "--world", "worlds/world.toml", "--steps", "2", "--threads", "1").exit_code == 0
+
+
 def test_commands_that_do_not_simulate_do_not_import_numba(tmp_path):
     code = textwrap.dedent(
         f"""

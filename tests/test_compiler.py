@@ -316,6 +316,19 @@ def test_missing_required_mod_cycles_and_duplicate_names(registry, tmp_path):
     ]
 
 
+def test_a_byte_for_byte_copy_of_a_mod_is_the_same_mod(registry, tmp_path):
+    # As in a checkout whose mods/ are also installed (not editable) as the bundled ones.
+    from sandmod.plugins.toml_mods import bundled_mods_dir
+
+    text = (bundled_mods_dir() / "water.toml").read_text()
+    ruleset = load_ruleset(None, [write_mods(tmp_path / "mods", {"water.toml": text})], registry)
+    water = [m for m in ruleset.mods if m.name == "water"]
+    assert len(water) == 1 and water[0].source.name == _bundled("water.toml")
+    assert problems_of(registry, tmp_path / "edited", {"water.toml": text + "\n# edited\n"}) == [
+        "edited/mods/water.toml:5:1: mod.name: mod 'water' is also defined by " + _bundled("water.toml")
+    ]
+
+
 def test_load_order_puts_dependencies_first(registry):
     ruleset = load_ruleset(["lava"], registry=registry)
     names = [m.name for m in ruleset.mods]

@@ -35,7 +35,7 @@ def cli() -> None:
 
 
 def _mod_folders(mod_dirs) -> list[Path]:
-    """./mods when there is one, then every --mods DIR."""
+    """./mods when there is one, then every --mods DIR (a world's own mods/ beside it comes first: see load_world)."""
     return ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
 
 
@@ -83,7 +83,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     from sandmod.render import render as run
     from sandmod.world import compile_new_kernels
 
-    loaded = load_world(world, mod_dirs=mod_dirs, seed=seed)
+    loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed)
     warnings = [str(w) for w in loaded.warnings]
     if from_snapshot is not None:
         from sandmod.snapshots import load_snapshot
@@ -295,7 +295,7 @@ def validate(paths, mod_dirs) -> None:
             mod_files.append(path)
         else:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
-    report = check(load_registry(), folders, mod_files, worlds, mod_dirs)
+    report = check(load_registry(), folders, mod_files, worlds, _mod_folders(mod_dirs))
     for warning in report.warnings:
         click.echo(f"warning: {warning}", err=True)
     if problems or report.problems:
@@ -441,7 +441,7 @@ def palette(world, output, mod_dirs) -> None:
     if world is not None:
         from sandmod.loading import load_world
 
-        ruleset = load_world(world, mod_dirs=mod_dirs).ruleset
+        ruleset = load_world(world, mod_dirs=_mod_folders(mod_dirs)).ruleset
     else:
         from sandmod.loading import load_ruleset
 
@@ -592,7 +592,7 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
 
     benches = []
     for path in worlds:  # every file checked before anything is timed
-        timed, warnings = benchmark.world_bench(path, mod_dirs=mod_dirs, seed=seed)
+        timed, warnings = benchmark.world_bench(path, mod_dirs=_mod_folders(mod_dirs), seed=seed)
         for warning in warnings:
             click.echo(f"warning: {warning}", err=True)
         benches.append(timed)
