@@ -31,8 +31,12 @@ def site(tmp_path_factory) -> Path:
     import tomllib
 
     folder = tmp_path_factory.mktemp("site")
-    shutil.copytree(PACKAGE / "sandmod_ascii", folder / "sandmod_ascii")
-    project = tomllib.loads((PACKAGE / "pyproject.toml").read_text())["project"]
+    config = tomllib.loads((PACKAGE / "pyproject.toml").read_text())
+    for source in packaged_files(config["tool"]["setuptools"]):
+        target = folder / source.relative_to(PACKAGE)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(source, target)
+    project = config["project"]
     info = folder / f"sandmod_ascii-{project['version']}.dist-info"
     info.mkdir()
     (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {project['name']}\nVersion: {project['version']}\n")
@@ -41,6 +45,30 @@ def site(tmp_path_factory) -> Path:
         "".join(f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in points.items()) for group, points in groups.items())
     )
     return folder
+
+
+def packaged_files(setuptools: dict) -> list[Path]:
+    """What setuptools puts in the wheel: each listed package's modules, and its package data."""
+    files = []
+    for package in setuptools["packages"]:
+        folder = PACKAGE.joinpath(*package.split("."))
+        files += folder.glob("*.py")
+        for pattern in setuptools.get("package-data", {}).get(package, []):
+            files += folder.glob(pattern)
+    return files
+
+
+def test_every_folder_of_the_package_is_named_in_its_packages():
+    """A folder left out of ``packages`` makes pip print a long warning, and its files may be left out."""
+    import tomllib
+
+    listed = set(tomllib.loads((PACKAGE / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    folders = {
+        ".".join(d.relative_to(PACKAGE).parts)
+        for d in (PACKAGE / "sandmod_ascii").rglob("*")
+        if d.is_dir() and d.name != "__pycache__"
+    } | {"sandmod_ascii"}
+    assert folders == listed
 
 
 def run(site: Path, *args: str, disable: str = "", cwd: Path | None = None) -> subprocess.CompletedProcess:
