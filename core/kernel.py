@@ -64,6 +64,7 @@ from numba import njit, prange  # noqa: E402
 numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was imported before us
 
 from . import hashing, traversal  # noqa: E402
+from .hashing import ROLL_BITS  # noqa: E402
 from .compiler import (  # noqa: E402
     ARCHETYPE_CODES,
     BLAST_COLUMNS,
@@ -1116,6 +1117,49 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
             if stirred[cy, cx, 0] != 0:
                 even[cy, cx] = 0
     return detonations.sum()
+
+
+@njit(cache=True)
+def paint_cells(s, ys, xs, element, cargo, vx, vy, only_empty, threshold, chance_key, spawn_key, life_frames, life_jitter, energy, awake, even):
+    """:meth:`sandmod.world.World.paint_cells` for what is painted every frame: emitters and sprays.
+
+    Each cell ``ys[i]``, ``xs[i]`` (an empty one, with ``only_empty``; a cell
+    given twice counts once) whose roll under ``chance_key`` is below
+    ``threshold`` becomes a newly born ``element`` carrying ``cargo``: a
+    hashed shade and lifetime timer, holding ``energy``; at rest and LOOSE,
+    or, where ``vx`` and ``vy`` are given (1/256ths of a cell a frame, one
+    per cell; empty: none), in flight at that velocity. The chunks within
+    WAKE_MARGIN of it wake, their heat no longer known to be even. Returns
+    how many were painted.
+
+    The cells come out as the numpy method's (which builds scenes without
+    numba; tests compare the two), without its few dozen array operations a
+    call: for a few emitters, most of a small world's frame.
+    """
+    cells, shade, timer, flags = s.cells, s.shade, s.timer, s.flags
+    height, width = cells.shape
+    moving = len(vx) > 0
+    painted = 0
+    for i in range(len(ys)):
+        y, x = np.int64(ys[i]), np.int64(xs[i])
+        if only_empty and cells[y, x] != 0:
+            continue
+        if (_cell_key(chance_key, x, y) >> (32 - ROLL_BITS)) >= threshold:
+            continue
+        shade[y, x], timer[y, x] = _spawn_state(_cell_key(spawn_key, x, y), life_frames, life_jitter)
+        cells[y, x] = element
+        s.carry[y, x] = cargo
+        s.heat[y, x] = energy
+        if moving:
+            s.vx[y, x], s.vy[y, x], flags[y, x] = vx[i], vy[i], 0
+        else:
+            s.vx[y, x], s.vy[y, x], flags[y, x] = 0, 0, LOOSE
+        for wy in (max(y - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min(y + WAKE_MARGIN, height - 1) >> CHUNK_SHIFT):
+            for wx in (max(x - WAKE_MARGIN, 0) >> CHUNK_SHIFT, min(x + WAKE_MARGIN, width - 1) >> CHUNK_SHIFT):
+                awake[wy, wx] = WHOLE
+                even[wy, wx] = 0
+        painted += 1
+    return painted
 
 
 @njit(cache=True)

@@ -148,7 +148,8 @@ class Spray:
         count = whole + (int(mix32(key) >> (32 - ROLL_BITS)) < chance_threshold(self.rate - whole))
         order = cell_hash(key, self.xs.astype(np.uint64), self.ys.astype(np.uint64))
         picks = np.argsort(order, kind="stable")[:count]  # distinct cells, in a hashed order
-        rolls = [[mix32(key ^ mix32(j * 3 + part + 1)) / 2**32 for part in range(3)] for j in range(len(picks))]
+        parts = np.arange(1, 3 * len(picks) + 1, dtype=np.uint64)  # particle j's three rolls: hashes of 3j+1 to 3j+3
+        rolls = (mix32(key ^ mix32(parts)) / 2**32).reshape(-1, 3).tolist()
         angles = [math.radians(self.direction + (r[1] - 0.5) * self.spread) for r in rolls]
         speeds = [self.speeds[0] + r[2] * (self.speeds[1] - self.speeds[0]) for r in rolls]
         vx = np.array([s * math.cos(a) for a, s in zip(angles, speeds)])
@@ -184,6 +185,14 @@ class Heater:
 
 
 CACHE_LINE = 64  # bytes
+_AT_REST = np.zeros(0, np.int64)  # no velocities: what World._pour paints is at rest
+
+
+def _speed_units(cells_a_frame) -> np.ndarray:
+    """Speeds in cells a frame as the state holds them, 1/256ths of a cell, within MAX_SPEED
+    (the kernel then holds each particle to its own max_speed)."""
+    limit = MAX_SPEED * SUBCELL
+    return np.clip(np.round(np.asarray(cells_a_frame, float) * SUBCELL), -limit, limit).astype(np.int64)
 
 
 def _on_own_lines(shape: tuple[int, int], dtype) -> np.ndarray:
@@ -275,6 +284,22 @@ class World:
         self.wake(ys, xs)
         return len(xs)
 
+    def _pour(
+        self, ys, xs, element: int, *, cargo: int = 0, velocity=None, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT
+    ) -> int:
+        """:meth:`paint_cells` in the kernel, for what is painted every frame; ``velocity``: the
+        painted cells' (vx, vy) arrays in 1/256ths of a cell a frame, or None for at rest."""
+        from . import kernel  # the current one, even where ``self.kernel`` is another version being timed
+
+        t = self.ruleset.tables
+        vx, vy = (_AT_REST, _AT_REST) if velocity is None else velocity
+        return kernel.paint_cells(
+            self.state, np.asarray(ys, np.int64), np.asarray(xs, np.int64), element, cargo, vx, vy, only_empty,
+            chance_threshold(chance), frame_key(self.seed, self.frame, salt), frame_key(self.seed, self.frame, SALT_SPAWN ^ salt),
+            int(t.life_frames[element]), int(t.life_jitter[element]), int(t.heat_cap[element]) * int(t.temp_start[element]),
+            self.awake, self._even,
+        )  # fmt: skip
+
     def launch(self, ys: np.ndarray, xs: np.ndarray, vx: np.ndarray, vy: np.ndarray) -> int:
         """Send cells flying: each becomes a particle carrying it, at (vx, vy) cells per frame.
 
@@ -299,26 +324,19 @@ class World:
         A particle element flies as itself, carrying what its ``carries`` says;
         any other element flies as ``base:particle`` carrying it. Returns how many were placed.
         """
-        s, t = self.state, self.tables
-        ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
-        vx, vy = np.broadcast_to(vx, ys.shape), np.broadcast_to(vy, ys.shape)
-        first = np.sort(np.unique(ys * self.width + xs, return_index=True)[1])  # one particle per cell
-        keep = first[s.cells[ys[first], xs[first]] == 0]
-        ys, xs, vx, vy = ys[keep], xs[keep], vx[keep], vy[keep]
+        t = self.tables
+        ys = np.asarray(ys, np.int64)
+        velocity = (_speed_units(np.broadcast_to(vx, ys.shape)), _speed_units(np.broadcast_to(vy, ys.shape)))
         if t.archetype[element] == ARCHETYPE_CODES["particle"]:
             particle, cargo = element, int(t.carries[element])
         else:
             particle, cargo = self.ruleset.particle, element
-        self.paint_cells(ys, xs, particle, salt=SALT_SPRAY)
-        s.carry[ys, xs] = cargo
-        self._set_velocity(ys, xs, vx, vy)
-        return len(xs)
+        return self._pour(ys, xs, particle, cargo=cargo, velocity=velocity, only_empty=True, salt=SALT_SPRAY)
 
     def _set_velocity(self, ys, xs, vx, vy) -> None:
-        limit = MAX_SPEED * SUBCELL  # the kernel then holds each particle to its own max_speed
         s = self.state
-        s.vx[ys, xs] = np.clip(np.round(np.asarray(vx, float) * SUBCELL), -limit, limit)
-        s.vy[ys, xs] = np.clip(np.round(np.asarray(vy, float) * SUBCELL), -limit, limit)
+        s.vx[ys, xs] = _speed_units(vx)
+        s.vy[ys, xs] = _speed_units(vy)
         s.flags[ys, xs] = 0
 
     def temperature(self) -> np.ndarray:
@@ -404,9 +422,7 @@ class World:
         kernel = self._kernel()
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
-                self.paint_cells(
-                    emitter.ys, emitter.xs, emitter.element, chance=emitter.chance, only_empty=True, salt=SALT_PAINT + 1 + number
-                )
+                self._pour(emitter.ys, emitter.xs, emitter.element, chance=emitter.chance, only_empty=True, salt=SALT_PAINT + 1 + number)
         for spray in self.sprays:
             if spray.active(self.frame):
                 ys, xs, vx, vy = spray.shots(self.seed, self.frame)
@@ -501,6 +517,7 @@ def compile_kernels(ruleset: Ruleset | None = None) -> float:
         ruleset = load_ruleset()
     world = World(ruleset, CHUNK, CHUNK)
     world.step()
+    world.spawn_particles(np.zeros(1, np.int64), np.zeros(1, np.int64), 0, 0.0, 0.0)  # what emitters and sprays paint with
     world._explode(world._kernel().take_detonations(world.state, world.tables, world._detonations), 0)
     kernelcache.mark_compiled()
     return time.perf_counter() - started
