@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sandmod.hashing import SALT_SPRAY
 from sandmod.world import World
 from test_chunks import digest
 
@@ -56,8 +57,6 @@ def spawn_reference(world: World, ys, xs, element: int, vx, vy) -> int:
     ys, xs, vx, vy = ys[keep], xs[keep], vx[keep], vy[keep]
     flying = t.archetype[element] == world.tables.archetype[world.ruleset.particle]
     particle, cargo = (element, int(t.carries[element])) if flying else (world.ruleset.particle, element)
-    from sandmod.hashing import SALT_SPRAY
-
     world.paint_cells(ys, xs, particle, salt=SALT_SPRAY)
     s.carry[ys, xs] = cargo
     s.vx[ys, xs] = np.clip(np.round(vx * 256), -16 * 256, 16 * 256)
