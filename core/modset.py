@@ -126,6 +126,11 @@ def _find_cycle(mods: dict[str, LoadedMod]) -> list[str]:
         path.append(following)
 
 
+def is_world(data: dict) -> bool:
+    """Whether a file's tables are a world's ([world], no [mod]): a world beside mods is not one of them."""
+    return "world" in data and "mod" not in data
+
+
 def find_mods(registry: Registry, extra_dirs: Iterable[Path] = (), extra_files: Iterable[Path] = ()) -> ModSet:
     """Read and validate every mod the registry, ``extra_dirs`` and ``extra_files`` provide.
 
@@ -175,9 +180,12 @@ def discover_mods(
             continue  # e.g. a checkout's mods/ beside the same files installed (not editable) as the bundled mods
         copies.add(copy)
         try:
-            add(loader.value(path), plugin)
+            source = loader.value(path)
         except ProblemsError as exc:
             problems.extend(exc.problems)
+            continue
+        if not is_world(source.data):
+            add(source, plugin)
     for entry in registry.mods:
         add(entry.value, entry.plugin)
 

@@ -221,6 +221,32 @@ def test_validate_accepts_good_files_and_reports_every_bad_one():
     ]
 
 
+def test_validate_checks_the_world_files_of_a_folder_as_worlds():
+    result = invoke("validate", str(EXAMPLES))
+    assert result.exit_code == 0, result.output
+    assert result.stdout.rstrip().endswith(f"{len(list(EXAMPLES.glob('*.toml')))} worlds")
+    levels = Path("levels")  # worlds, with their mods beside them
+    write_mods(levels / "mods", {"glow.toml": '[mod]\nname = "glow"\n[elements.glow]\narchetype = "gas"\ncolor = "#000000"\n'})
+    (levels / "good.toml").write_text(POURING.format(element="glow"))
+    (levels / "bad.toml").write_text(POURING.format(element="glow").replace("width = 40", "width = -40", 1))
+    result = invoke("validate", "levels")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "levels/bad.toml:3:1: world.width: must be >= 4 (got -40)",
+        "levels/mods/glow.toml:3:1: elements.glow.density: required field is missing",
+        "levels/mods/glow.toml:3:1: elements.glow.dispersion: required field is missing",
+    ]
+    (levels / "bad.toml").unlink()
+    (levels / "mods" / "glow.toml").write_text(
+        '[mod]\nname = "glow"\n[elements.glow]\narchetype = "gas"\ncolor = "#000000"\ndensity = 0.5\ndispersion = 2\n'
+    )
+    result = invoke("validate", "levels")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.rstrip().endswith("1 worlds")
+    result = invoke("render", "levels/good.toml", "--mods", "levels", "--frames", "4", "-q")  # a world among mods is not one
+    assert result.exit_code == 0, result.output
+
+
 def test_a_dropped_in_mod_appears_in_list_and_render():
     write_mods(
         Path("mods"),

@@ -268,7 +268,7 @@ def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
 @click.argument("paths", nargs=-1, type=click.Path(path_type=Path))
 @_mods_option
 def validate(paths, mod_dirs) -> None:
-    """Check mod files, mod folders and world files; exit 2 if anything is wrong.
+    """Check mod files, world files and folders of either; exit 2 if anything is wrong.
 
     With no PATHS, checks every mod found (the bundled ones and ./mods).
     """
@@ -281,8 +281,9 @@ def validate(paths, mod_dirs) -> None:
     if not paths and Path("mods").is_dir():
         folders.append(Path("mods"))
     for path in paths:
-        if path.is_dir():
+        if path.is_dir():  # its mods, and its world files as worlds
             folders.append(path)
+            worlds += _world_files(path)
             continue
         try:
             data = TomlSource.read(path).data
@@ -304,6 +305,21 @@ def validate(paths, mod_dirs) -> None:
         f"ok: {report.mods} mods ({report.elements} elements, {report.reactions} reactions, {report.tests} tests), "
         f"{report.worlds} worlds"
     )
+
+
+def _world_files(folder: Path) -> list[Path]:
+    """The world files in a folder (those that do not read are reported with its mods)."""
+    from sandmod.modset import is_world
+    from sandmod.tomlsource import TomlSource
+
+    found = []
+    for path in sorted(folder.glob("*.toml")):
+        try:
+            if is_world(TomlSource.read(path).data):
+                found.append(path)
+        except ProblemsError:
+            pass
+    return found
 
 
 def _write_new(path: Path, text: str, *, replace: bool = False) -> None:
