@@ -274,6 +274,7 @@ def validate(paths, mod_dirs) -> None:
     """
     from sandmod.checking import check
     from sandmod.loading import load_registry
+    from sandmod.modset import is_world
     from sandmod.tomlsource import TomlSource
 
     problems: list[Problem] = []
@@ -290,7 +291,7 @@ def validate(paths, mod_dirs) -> None:
         except ProblemsError as exc:
             problems.extend(exc.problems)
             continue
-        if "world" in data:
+        if is_world(data):
             worlds.append(path)
         elif "mod" in data:
             mod_files.append(path)
