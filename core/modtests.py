@@ -73,7 +73,7 @@ class Outcome:
         """The failure as a mod author reads it: where, the grids side by side, what is wrong."""
         case, spec = self.case, self.case.spec
         where = case.file if case.line is None else f"{case.file}:{case.line}"
-        lines = [f"{where}: tests.{case.number} ({case.id}): after {spec.frames} frames, seed {spec.seed}"]
+        lines = [f"{where}: tests.{case.number} ({case.id}): after {spec.frames} frame{'' if spec.frames == 1 else 's'}, seed {spec.seed}"]
         columns = [("scene", self.scene)] + ([("expected", self.expected)] if self.expected is not None else []) + [("actual", self.actual)]
         widths = [max(len(title), len(rows[0]) if rows else 0) for title, rows in columns]
         lines.append("  " + "   ".join(title.ljust(w) for (title, _), w in zip(columns, widths)).rstrip())

@@ -242,7 +242,7 @@ def test_validate_checks_the_world_files_of_a_folder_as_worlds():
     )
     result = invoke("validate", "levels")
     assert result.exit_code == 0, result.output
-    assert result.stdout.rstrip().endswith("1 worlds")
+    assert result.stdout.rstrip().endswith("1 world")
     result = invoke("render", "levels/good.toml", "--mods", "levels", "--frames", "4", "-q")  # a world among mods is not one
     assert result.exit_code == 0, result.output
 

@@ -34,6 +34,11 @@ def cli() -> None:
     """A falling-sand engine in which every element is data."""
 
 
+def _counted(count: int, noun: str) -> str:
+    """'1 world', '2 worlds': a count and its noun, plural unless the count is one."""
+    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"
+
+
 def _mod_folders(mod_dirs) -> list[Path]:
     """./mods when there is one, then every --mods DIR (a world's own mods/ beside it comes first: see load_world)."""
     return ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
@@ -121,8 +126,8 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     if not quiet:
         extras = "".join(f", {what} {display_path(path)}" for what, path in (("still", still), ("snapshot", save_snapshot)) if path)
         click.echo(
-            f"wrote {display_path(output)}: {result.images} images of {result.width}x{result.height} "
-            f"from {result.frames} frames in {time.perf_counter() - started:.1f} s ({output_bytes(output) / 1e6:.2f} MB){extras}"
+            f"wrote {display_path(output)}: {_counted(result.images, 'image')} of {result.width}x{result.height} "
+            f"from {_counted(result.frames, 'frame')} in {time.perf_counter() - started:.1f} s ({output_bytes(output) / 1e6:.2f} MB){extras}"
         )
 
 
@@ -303,8 +308,8 @@ def validate(paths, mod_dirs) -> None:
     if problems or report.problems:
         raise ProblemsError(problems + report.problems)
     click.echo(
-        f"ok: {report.mods} mods ({report.elements} elements, {report.reactions} reactions, {report.tests} tests), "
-        f"{report.worlds} worlds"
+        f"ok: {_counted(report.mods, 'mod')} ({_counted(report.elements, 'element')}, {_counted(report.reactions, 'reaction')}, "
+        f"{_counted(report.tests, 'test')}), {_counted(report.worlds, 'world')}"
     )
 
 
@@ -374,10 +379,11 @@ _ARCHETYPES = ("static", "powder", "liquid", "gas", "particle")
 @click.argument("name", callback=_name(r"[a-z][a-z0-9_]*", "mod name"))
 @click.option("--archetype", type=click.Choice(_ARCHETYPES), help="How its first element moves (default: powder, or --like's).")
 @click.option("--like", help="Start the first element from an existing element's parameters.")
-@click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True)
+@click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True,
+              help="The folder to write the new mod in.")
 @_mods_option
 def new_mod(name, archetype, like, folder, mod_dirs) -> None:
-    """Write FOLDER/NAME.toml: a mod with one element called NAME and a test of it."""
+    """Write DIR/NAME.toml: a mod with one element called NAME and a test of it."""
     from sandmod import scaffold
 
     spec = _like(like, mod_dirs)
@@ -393,10 +399,11 @@ def new_mod(name, archetype, like, folder, mod_dirs) -> None:
 @click.option("--archetype", type=click.Choice(_ARCHETYPES), help="How it moves (default: --like's, else powder).")
 @click.option("--like", help="Start from an existing element's parameters (those its archetype accepts).")
 @click.option("--mod", "mod_file", type=click.Path(dir_okay=False, path_type=Path), help="Add it to this mod file instead of a new mod.")
-@click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True)
+@click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True,
+              help="The folder to write the new mod in.")
 @_mods_option
 def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
-    """Write a new element NAME (with a test): into --mod FILE, or as a new mod FOLDER/NAME.toml."""
+    """Write a new element NAME (with a test): into --mod FILE, or as a new mod DIR/NAME.toml."""
     from sandmod import scaffold
     from sandmod.tomlsource import TomlSource
 
@@ -465,7 +472,7 @@ def palette(world, output, mod_dirs) -> None:
         ruleset = load_ruleset(None, _mod_folders(mod_dirs))
     with _writing(output), atomic_path(output) as tmp:
         swatch_card(ruleset).save(tmp, format="PNG")
-    click.echo(f"wrote {display_path(output)}: {len(ruleset.elements)} elements")
+    click.echo(f"wrote {display_path(output)}: {_counted(len(ruleset.elements), 'element')}")
 
 
 @cli.command()
