@@ -329,6 +329,7 @@ class Comparison:
     against: str
     against_mcell_updates_per_second: float
     speedup: float  # this kernel's speed over the other's
+    same_frames: bool  # False: each stepped on from its own frames (--own-frames)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -374,6 +375,7 @@ def compare(
     *,
     segment: int = 25,
     repeats: int = 3,
+    own_frames: bool = False,
 ) -> list[float]:
     """Seconds each kernel module takes to step ``bench``'s world for ``steps`` steps, on the same frames.
 
@@ -388,6 +390,8 @@ def compare(
     of every stretch, or :class:`FramesDiffer` is raised; the next stretch
     starts from the first kernel's state, wake marks included (any kernel
     accepts another's marks: they only ever cover more than is needed).
+    With ``own_frames`` (kernels whose rules differ), each kernel goes on from
+    its own state instead, and frames may differ.
     """
     import numba
 
@@ -400,14 +404,16 @@ def compare(
         world.step()
         _restore(world, start, frame)
     best = [0.0] * len(kernels)
+    starts = [_saved(world)] * len(kernels)  # each kernel's state at the start of the stretch
+    base = world.frame
     for first in range(0, steps, segment):
-        start, frame = _saved(world), world.frame
+        frame = base + first
         length = min(segment, steps - first)
         times = [float("inf")] * len(kernels)
         ends: list[list[np.ndarray] | None] = [None] * len(kernels)
         for repeat in range(repeats):
             for k in range(len(kernels)) if repeat % 2 == 0 else reversed(range(len(kernels))):
-                _restore(world, start, frame)
+                _restore(world, starts[k], frame)
                 numba.set_num_threads(counts[k])
                 world.kernel = kernels[k]
                 began = time.perf_counter()
@@ -417,9 +423,12 @@ def compare(
                 if ends[k] is None:
                     ends[k] = _saved(world)
         frames = len(world.state)  # the cells' arrays come first; the chunks' marks may differ, as one kernel may wake finer than another
-        if any(not all(np.array_equal(a, b) for a, b in zip(ends[0][:frames], end[:frames])) for end in ends[1:]):
+        if own_frames:
+            starts = list(ends)
+        elif any(not all(np.array_equal(a, b) for a, b in zip(ends[0][:frames], end[:frames])) for end in ends[1:]):
             raise FramesDiffer(frame + length)
-        _restore(world, ends[0], frame + length)
+        else:
+            starts = [ends[0]] * len(kernels)
         best = [b + t for b, t in zip(best, times)]
     world.kernel = None
     return best

@@ -4,7 +4,8 @@ Element ids are ``mod:element``. Numeric ids are given here, in a fixed order
 (``base:empty`` is 0, then the ids sorted), and never written into files.
 Reactions become an n x n interaction matrix (what each cell of a touching
 pair becomes, and the chance per frame); densities and archetypes become a
-displacement matrix (which element may swap into which).
+displacement matrix (which element may trade places with which, and how
+eagerly).
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ BLAST_FLING, BLAST_SPEED, BLAST_HEAT, BLAST_SCORCH = range(6, 10)
 BLAST_COLUMNS = 10
 #: Bits of Tables.thermal: what the kernel checks about a cell's heat each frame.
 HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
+#: Tables.displace: the chance of an exchange in 1/255ths; ALWAYS needs no roll.
+ALWAYS = 255
 _NO_LIMIT = 2**62
 
 
@@ -58,7 +61,7 @@ class Tables(NamedTuple):
     life_jitter: np.ndarray  # uint16[n]: extra frames, chosen per cell
     life_into: np.ndarray  # uint16[n]: what a cell decays into
     reactive: np.ndarray  # int64[n]: partner mask: bit b % 64 set when the element reacts with some b (0: none)
-    displace: np.ndarray  # uint8[n, n]: a moving cell of a may swap with a cell of b
+    displace: np.ndarray  # uint8[n, n]: chance (of ALWAYS) that a moving cell of a trades places with a cell of b; 0: never
     displaces: np.ndarray  # int64[n]: mask: bit b % 64 set when a may swap with some b (a first test, like reactive)
     react_chance: np.ndarray  # uint32[n, n]: roll threshold per frame of contact
     react_into_a: np.ndarray  # uint16[n, n]: what a becomes
@@ -329,11 +332,17 @@ def blast_row(explosion, leaves: int, x: int = 0, y: int = 0) -> np.ndarray:
 
 
 def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
-    """Which way movers fall (+1 falls, -1 rises) and who may swap into whom.
+    """Which way movers fall (+1 falls, -1 rises) and who may trade places with whom, how eagerly.
 
     Powders and liquids fall; gases rise, or fall if heavier than the air
-    (``base:empty``'s density). A mover may swap with a fluid (empty, liquid,
-    gas) lighter than itself when falling, denser when rising.
+    (``base:empty``'s density). A mover may trade places with a fluid (liquid
+    or gas) lighter than itself when falling, denser when rising, each frame
+    with a chance that grows with the gap in density: twice the gap's share
+    of the larger density, so that one at least twice as dense as the other
+    always trades, and one a little denser seldom. Powders and liquids fall
+    through the air (empty cells) freely; a gas at rest starts to rise (or
+    sink) through it with the gap's share of the larger density, so that a
+    cloud rises raggedly, not row by row.
     """
     air = elements[0].spec.density
     densities = np.array([getattr(e.spec, "density", np.inf) for e in elements])
@@ -343,14 +352,23 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
             t.fall_dir[e.index] = 1
         elif kind == "gas":
             t.fall_dir[e.index] = -1
-    fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("empty", "liquid", "gas")])
+    fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("liquid", "gas")])
     for a in range(1, len(elements)):
         if t.fall_dir[a] != 0:
-            lighter = densities < densities[a] if t.fall_dir[a] > 0 else densities > densities[a]
-            t.displace[a] = fluid & lighter
-            t.displace[a, a] = 0
-            t.displace[a, 0] = 1  # every mover moves into empty cells
+            for b in np.flatnonzero(fluid):
+                if b != a:
+                    t.displace[a, b] = exchange_chance(densities[a], densities[b], int(t.fall_dir[a]), 1.5)
+            gas = t.archetype[a] == ARCHETYPE_CODES["gas"]
+            t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a]), 1.0) if gas else ALWAYS
     t.displaces[:] = element_masks(t.displace)
+
+
+def exchange_chance(mover: float, other: float, fall_dir: int, eagerness: float) -> int:
+    """The chance (of ALWAYS) that a mover of density ``mover`` falling (+1) or rising (-1)
+    trades places with a fluid of density ``other`` in a frame: ``eagerness`` times the
+    gap's share of the larger density, at most sure, at least 1; 0 where it cannot."""
+    gap = (mover - other) * fall_dir
+    return max(1, min(ALWAYS, int(round(eagerness * ALWAYS * gap / max(mover, other))))) if gap > 0 else 0
 
 
 @dataclass

@@ -66,6 +66,7 @@ numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was impo
 from . import hashing, traversal  # noqa: E402
 from .hashing import ROLL_BITS  # noqa: E402
 from .compiler import (  # noqa: E402
+    ALWAYS,
     ARCHETYPE_CODES,
     BLAST_COLUMNS,
     BLAST_FLING,
@@ -113,8 +114,9 @@ LIQUID = ARCHETYPE_CODES["liquid"]
 GAS = ARCHETYPE_CODES["gas"]
 PARTICLE = ARCHETYPE_CODES["particle"]
 
-DONE = MOVED | REACTED  # flag bits (defined beside world.State) of a cell finished this frame
+DONE = MOVED | REACTED  # flag bits (defined beside world.State) of a cell no other may move this frame
 KEPT = LOOSE | BURNING | SCORCHED  # flag bits that travel with a cell
+CARRIED = KEPT | REACTED  # and those it takes along when it moves (REACTED until the frame ends)
 FRESH = ~(BURNING | SCORCHED)  # a cell turning into another element keeps only these flag bits
 T_LOW = int(MIN_TEMPERATURE * TEMP_ONE)
 T_HIGH = int(MAX_TEMPERATURE * TEMP_ONE)
@@ -127,6 +129,8 @@ KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
 SALT_KNOCK = 0x27D4EB2F
 SALT_ROUND = 0x165667B1
 SALT_FIRE = 0x61C88647
+SALT_EXCHANGE = 0x3243F6A9
+OPEN, SHUT, WAIT = 0, 1, 2  # a move's first cell (see _way_into): go; no; not this frame, try again
 LINE_CELLS = CACHE_LINE // 4  # cells in a cache line of the widest array (heat, 4 bytes): a row's lines are asked for this far apart
 CACHED_CELLS = 1 << 16  # a world of no more cells (about a megabyte of state) stays in the CPU's cache: nothing to prefetch
 EVEN, SWEPT = 1, 2  # marks of conduct's `even`: heat known to be even; being swept whole this frame
@@ -175,6 +179,74 @@ def _enterable(displaceable, occupant, occupant_flags):
     """May a mover take this place? Only lighter fluids give way, and not twice a frame
     (empty cells excepted: they have nothing to lose)."""
     return displaceable != 0 and (occupant == 0 or (occupant_flags & DONE) == 0)
+
+
+@njit(cache=True)
+def _pass_tiles(p, frame):
+    """The parity of the tiles' columns and rows that pass p (0..3) of a frame updates.
+
+    The order of the four passes changes with the frame, so a falling stream
+    crosses each seam in step (see :func:`step`)."""
+    return (p & 1) ^ ((frame >> 1) & 1), (p >> 1) ^ (frame & 1) ^ 1
+
+
+@njit(cache=True)
+def _pass_of(tx, ty, frame):
+    """The pass (0..3) of a frame in which tile (tx, ty) is updated."""
+    for p in range(4):
+        px, py = _pass_tiles(p, frame)
+        if px == (tx & 1) and py == (ty & 1):
+            return p
+    return -1
+
+
+@njit(cache=True)
+def _unvisited(qx, qy, x, y, forward, x0, y0, x1, y1, frame):
+    """Is cell (qx, qy) still to have its turn this frame, while (x, y) has its own in the
+    region x0..x1-1, y0..y1-1 (rows bottom-up, each row forward or back)? A cell of another
+    tile has it if that tile's pass comes later."""
+    if x0 <= qx < x1 and y0 <= qy < y1:
+        return qy < y or (qy == y and (qx > x) == forward)
+    return _pass_of(qx >> TILE_SHIFT, qy >> TILE_SHIFT, frame) > _pass_of(x0 >> TILE_SHIFT, y0 >> TILE_SHIFT, frame)
+
+
+@njit(cache=True)
+def _restless(f, th, life, energy, cold, hot, ignite):
+    """Has a cell's own update work to do this frame: burning, a lifetime, a flame, or a
+    phase change or a fire due (its flags, thermal bits, lifetime, heat and limits)?"""
+    if (f & BURNING) != 0 or life != 0 or (th & IGNITES) != 0:
+        return True
+    return th != 0 and (energy < cold or energy > hot or ((th & FLAMMABLE) != 0 and energy >= ignite))
+
+
+@njit(cache=True)
+def _way_into(kind, threshold, o, o_kind, o_flags, o_energy, o_thermal, o_life, o_cold, o_hot, o_ignite, level, moving, roll_key, x, y, qx, qy, forward, x0, y0, x1, y1, frame):
+    """May a mover of archetype ``kind`` at (x, y), on its turn, go into (qx, qy), the first cell of a move,
+    which holds ``o`` (its archetype, flags, heat energy, thermal bits, lifetime and heat limits)?
+
+    OPEN, SHUT, or WAIT: not this frame, but maybe on a later one (its region
+    stays awake). ``threshold`` is the mover's chance against ``o``
+    (``Tables.displace``, not 0); one roll a frame under ``roll_key`` decides
+    it for every move of the mover, so they agree. Into an empty cell: yes,
+    but a gas at rest (not ``moving``) starts to rise or sink through the air
+    only by the chance. Into a fluid: not one done this frame; ``level``
+    (sideways), a liquid or gas trades places only with its own kind, and
+    freely (one flowing into the other would move neither up nor down); not
+    one still to have its own update this frame with work in it (no cell is
+    moved out of its heat, fire or lifetime); up or down, by the chance.
+    """
+    fluid = kind == LIQUID or kind == GAS
+    if o == 0:
+        if threshold == ALWAYS or moving or level:
+            return OPEN
+    else:
+        if (o_flags & DONE) != 0 or (level and fluid and o_kind != kind):
+            return SHUT
+        if _unvisited(qx, qy, x, y, forward, x0, y0, x1, y1, frame) and _restless(o_flags, o_thermal, o_life, o_energy, o_cold, o_hot, o_ignite):
+            return WAIT
+        if threshold == ALWAYS or (level and fluid):
+            return OPEN
+    return OPEN if (_cell_key(roll_key, x, y) >> 24) < threshold else WAIT
 
 
 @njit(cache=True)
@@ -347,6 +419,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     ambient = int(t.temp_start[0])  # the air's temperature is the world's outside
     knock_key = _mix32(move_key ^ SALT_KNOCK)
     fire_key = _mix32(move_key ^ SALT_FIRE)
+    exchange_key = _mix32(move_key ^ SALT_EXCHANGE)
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
     present = also_present
@@ -402,7 +475,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         x = sx0 + n if forward else sx1 - 1 - n
                         e = cells[_at(y, x)]
                         f = flags[_at(y, x)]
-                        if e == 0 or (f & DONE) != 0:
+                        if e == 0 or (f & MOVED) != 0:
                             n += 1
                             continue
                         ready = False  # moving, or not calm, or a lifetime, or a partner near: the full update
@@ -442,8 +515,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 break  # on the ground, and loose: it may roll or slide
                             n += 1  # at rest on the ground: stays put
                             continue
-                        if below == 0 or not (0 < x and x + 1 < width and 0 < y):
-                            break  # falling through empty cells, or at the world's edge
+                        if below == 0 or ty >= y1 or not (0 < x and x + 1 < width and 0 < y):
+                            break  # falling through empty cells, into another tile's cells, or at the world's edge
+                        threshold = displace[e, below]
+                        if threshold != ALWAYS and (_cell_key(exchange_key, x, y) >> 24) >= threshold:
+                            busy_x0, busy_x1 = min(busy_x0, x), max(busy_x1, x)  # it waits for its chance to sink
+                            n += 1
+                            continue
                         if (flags[_at(y, x - 1)] & flags[_at(y, x + 1)] & flags[_at(y - 1, x - 1)] & flags[_at(y - 1, x + 1)] & flags[_at(ty, x - 1)] & flags[_at(ty, x + 1)] & LOOSE) == 0:
                             break  # it may knock a resting grain loose
                         # Straight into a fluid: one cell, its speed lost, nothing knocked.
@@ -455,10 +533,10 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         heat[_at(y, x)], heat[_at(ty, x)] = heat[_at(ty, x)], heat[_at(y, x)]
                         vx[_at(y, x)] = vx[_at(ty, x)]
                         vy[_at(y, x)] = vy[_at(ty, x)]
-                        flags[_at(y, x)] = MOVED | (flags[_at(ty, x)] & KEPT)
+                        flags[_at(y, x)] = MOVED | (flags[_at(ty, x)] & CARRIED)
                         vx[_at(ty, x)] = 0
                         vy[_at(ty, x)] = 0
-                        flags[_at(ty, x)] = MOVED | LOOSE | (f & (BURNING | SCORCHED))
+                        flags[_at(ty, x)] = MOVED | LOOSE | (f & (CARRIED & ~LOOSE))
                         lo, hi = min(y, ty), max(y, ty)
                         busy_x0, busy_x1 = min(busy_x0, x), max(busy_x1, x)
                         busy_y0, busy_y1 = min(busy_y0, lo), max(busy_y1, hi)
@@ -473,8 +551,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                 else:
                     x = sx0 + i if forward else sx1 - 1 - i
                     e = cells[_at(y, x)]
-                    if e == 0 or (flags[_at(y, x)] & DONE) != 0:
-                        continue
+                    if e == 0 or (flags[_at(y, x)] & MOVED) != 0:
+                        continue  # its turn is over: it moved, or changed
                     ready = False
                 busy = False  # did anything change, or might it on a later frame?
                 stir = False  # did an element or a heat change (besides even swaps)?
@@ -588,7 +666,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
                         # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
                         # test: does any neighbour's bit show in the element's partner mask?
-                        partners = reactive[e] & present
+                        partners = reactive[e] & present if (flags[_at(y, x)] & REACTED) == 0 else 0  # once a frame
                         if partners != 0:
                             near = 0
                             if x + 1 < width:
@@ -632,7 +710,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                     shade[_at(y, x)], timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), life_frames[into_a], life_jitter[into_a])
                                     vx[_at(y, x)] = vy[_at(y, x)] = carry[_at(y, x)] = 0
                                     heat[_at(y, x)] = _energy(ta + warm, heat_cap[into_a])
-                                    flags[_at(y, x)] &= FRESH
+                                    flags[_at(y, x)] = (flags[_at(y, x)] & FRESH) | MOVED
                                 if into_b != b:
                                     cells[_at(ny, nx)] = into_b
                                     present |= _bit(into_b)
@@ -640,13 +718,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                     shade[_at(ny, nx)], timer[_at(ny, nx)] = _spawn_state(_cell_key(spawn_key, nx, ny), life_frames[into_b], life_jitter[into_b])
                                     vx[_at(ny, nx)] = vy[_at(ny, nx)] = carry[_at(ny, nx)] = 0
                                     heat[_at(ny, nx)] = _energy(tb + warm, heat_cap[into_b])
-                                    flags[_at(ny, nx)] &= FRESH
+                                    flags[_at(ny, nx)] = (flags[_at(ny, nx)] & FRESH) | MOVED
                                 flags[_at(y, x)] |= REACTED
                                 flags[_at(ny, nx)] |= REACTED
-                                reacted = True
+                                reacted = into_a != e
                                 break
                             if reacted:
-                                break
+                                break  # it became another element; one the reaction left as it was goes on to move
 
                     # 4. Movement: choose up to four moves to try in order, then walk them.
                     kind = archetype[e]
@@ -669,7 +747,22 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 near |= _bit(cells[_at(ny, nx)])
                         if (displaces[e] & near) == 0:
                             break
-                    opens = kind != PARTICLE and _within(ty, height) and _enterable(displace[e, cells[_at(ty, x)]], cells[_at(ty, x)], flags[_at(ty, x)])
+                    opens = False
+                    free_air = displace[e, 0] == ALWAYS  # it moves into empty cells without a roll
+                    if kind != PARTICLE and _within(ty, height):
+                        o = cells[_at(ty, x)]
+                        threshold = displace[e, o]
+                        opens = o == 0 and free_air  # the commonest case, decided at once
+                        if not opens and threshold != 0:
+                            way = _way_into(
+                                kind, threshold, o, archetype[o], flags[_at(ty, x)], heat[_at(ty, x)], thermal[o], life_frames[o], cold_limit[o],
+                                hot_limit[o], ignite_limit[o], False, old_vy != 0, exchange_key, x, y, x, ty, forward, x0, y0, x1, y1, frame,
+                            )
+                            opens = way == OPEN
+                            if way == WAIT:
+                                busy = True
+                                if kind == POWDER:
+                                    break  # a grain waits for its chance to sink (fluids flow aside meanwhile)
                     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
                     if fluid and not opens and (displaces[e] & present) != 0:
                         for k in range(1, 5):  # the same cells as above, less the one below
@@ -782,7 +875,19 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                                 hit = True
                                 break
                             o = cells[_at(qy, qx)]
-                            if o != 0 and (only_empty or k > 1 or not _enterable(displace[e, o], o, flags[_at(qy, qx)])):
+                            if k == 1 and not only_empty and (o != 0 or not free_air):
+                                threshold = displace[e, o]
+                                if threshold == 0:
+                                    break
+                                if not (o == 0 and threshold == ALWAYS):
+                                    way = _way_into(
+                                        kind, threshold, o, archetype[o], flags[_at(qy, qx)], heat[_at(qy, qx)], thermal[o], life_frames[o], cold_limit[o],
+                                        hot_limit[o], ignite_limit[o], qy == y, old_vy != 0, exchange_key, x, y, qx, qy, forward, x0, y0, x1, y1, frame,
+                                    )
+                                    if way != OPEN:
+                                        busy = busy or way == WAIT
+                                        break
+                            elif o != 0:
                                 hit = archetype[o] != PARTICLE  # particles in a swarm wait for each other
                                 break
                             if qx != px and qy != py:  # a diagonal step: one of its side cells must be open
@@ -801,6 +906,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             py = qy
                             if o != 0:
                                 break  # swapped into a fluid: the move ends there
+                            if dy == 0 and fluid and _within(qy + g, height) and cells[_at(qy + g, qx)] == 0:
+                                break  # flowing sideways over a drop: it falls from here
                         if px != x or py != y:
                             used = a
                             break
@@ -842,7 +949,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     by1 = max(y, py)
 
                     # Move: swap everything with the cell at the end of the walk.
-                    marks = flags[_at(y, x)] & (BURNING | SCORCHED)  # what travels with the mover besides LOOSE
+                    marks = flags[_at(y, x)] & (CARRIED & ~LOOSE)  # what travels with the mover besides LOOSE
                     if px != x or py != y:
                         # Heat stays even where two cells of one temperature trade places and neither cools.
                         stir = stir or _stirs(int(heat[_at(y, x)]), heat_cap[e], cooling[e], int(heat[_at(py, px)]), heat_cap[entered], cooling[entered], ambient)
@@ -855,7 +962,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         heat[_at(y, x)], heat[_at(py, px)] = heat[_at(py, px)], heat[_at(y, x)]
                         vx[_at(y, x)] = vx[_at(py, px)]
                         vy[_at(y, x)] = vy[_at(py, px)]
-                        flags[_at(y, x)] = MOVED | (flags[_at(py, px)] & KEPT)
+                        # Traded up or down, it is done for the frame; traded sideways, a mover above or below may still take its place.
+                        flags[_at(y, x)] = (MOVED if py != y or entered == 0 else 0) | (flags[_at(py, px)] & CARRIED)
                     vx[_at(py, px)] = cvx
                     vy[_at(py, px)] = cvy
                     flags[_at(py, px)] = MOVED | loose | marks
@@ -1089,8 +1197,7 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     order = np.empty_like(todo)
     for p in range(4):
         # Alternate which rows of tiles go first, so a falling stream crosses each seam in step.
-        py = (p >> 1) ^ (frame & 1) ^ 1
-        px = (p & 1) ^ ((frame >> 1) & 1)
+        px, py = _pass_tiles(p, frame)
         count = np.int64(0)  # not the literal 0: numba would compile update_tiles a second time for it
         for ty in range(py, tiles_y, 2):
             for tx in range(px, tiles_x, 2):

@@ -105,7 +105,7 @@ def uniform(ruleset, name, celsius, size=6):
         ("water", 100, +1, "steam"),
         ("water", 0, -1, "ice"),
         ("ice", 0, +1, "water"),
-        ("steam", 95, -1, "water"),
+        ("steam", 60, -1, "water"),
         ("lava", 900, -1, "stone"),
         ("stone", 1300, +1, "lava"),
         ("sand", 1100, +1, "glass"),

@@ -564,10 +564,11 @@ def test_(mods, mod_dirs) -> None:
               help="Time rendering instead: an image a step, recorded as FORMAT (repeatable: gif, apng, webp, png-frames).")
 @click.option("--against", type=click.Path(exists=True, dir_okay=False), metavar="KERNEL.py",
               help="Compare with another version of the kernel on the same frames (e.g. from git show REV:core/kernel.py).")
+@click.option("--own-frames", is_flag=True, help="With --against: the kernels' rules differ, so each steps on from its own frames.")
 @click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
 @click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
 @_mods_option
-def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, in_turns, yardstick, mod_dirs) -> None:
+def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
     """Time the kernel on a built-in scene or a world file: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -588,7 +589,9 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
     With --against, this kernel and the other take turns over stretches of
     25 steps, each stretch three times from the same state, and the best
     times count: a fair comparison on a machine whose speed drifts. Both
-    must step to the same frames (exit 1 where they do not). --in-turns
+    must step to the same frames (exit 1 where they do not), unless
+    --own-frames says their rules differ: then each goes on from its own
+    state, and the times compare the same scene, not the same frames. --in-turns
     does the same for the --threads counts (say --threads 1 --threads 2):
     their speeds, each over the first's, and a check that every count steps
     to the same frames.
@@ -607,6 +610,8 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
         raise click.UsageError("--size sizes the built-in scenes; a world file has its own size")
     if sum(map(bool, (against, in_turns, yardstick))) > 1:
         raise click.UsageError("--against, --in-turns and --yardstick do not go together: give one")
+    if own_frames and not against:
+        raise click.UsageError("--own-frames goes with --against")
     if yardstick and worlds:
         raise click.UsageError("--yardstick runs on the built-in scenes (its rules know sand and water only), not on a --world")
     thread_counts = thread_counts or (benchmark.max_threads(),)
@@ -630,7 +635,7 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
     if formats:
         _bench_recording(formats, runs, thread_counts, as_json)
     elif against:
-        _bench_against(against, runs, thread_counts, as_json)
+        _bench_against(against, runs, thread_counts, as_json, own_frames)
     elif in_turns:
         _bench_in_turns(runs, thread_counts, as_json)
     elif yardstick:
@@ -664,7 +669,7 @@ def _report(result, as_json: bool, line: str) -> None:
     click.echo(json.dumps(result.as_dict()) if as_json else line)
 
 
-def _bench_against(path, runs, thread_counts, as_json) -> None:
+def _bench_against(path, runs, thread_counts, as_json, own_frames: bool) -> None:
     from numba.core.errors import NumbaError
 
     from sandmod import benchmark, kernel
@@ -677,7 +682,7 @@ def _bench_against(path, runs, thread_counts, as_json) -> None:
         cells = b.width * b.height * steps / 1e6
         for threads in thread_counts:
             try:
-                ours, theirs = benchmark.compare(b, steps, threads, [kernel, other])
+                ours, theirs = benchmark.compare(b, steps, threads, [kernel, other], own_frames=own_frames)
             except benchmark.FramesDiffer as differ:
                 click.echo(f"error: {b.name}: {path} steps to other frames than this kernel (by frame {differ.frame})", err=True)
                 sys.exit(1)
@@ -685,14 +690,14 @@ def _bench_against(path, runs, thread_counts, as_json) -> None:
                 first = str(error).strip().splitlines()[0]
                 raise click.BadParameter(f"{path}: does not compile beside this sandmod ({type(error).__name__}: {first})", param_hint="'--against'") from None
             result = benchmark.Comparison(
-                b.name, b.width, b.height, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3)
+                b.name, b.width, b.height, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3), not own_frames
             )
             _report(
                 result,
                 as_json,
                 f"{_what(b, steps)}, {_threads(threads)}: "
                 f"this kernel {result.mcell_updates_per_second:.1f} million cell-updates/s, {path} "
-                f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, same frames",
+                f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, {'same frames' if result.same_frames else 'each on its own frames'}",
             )
 
 
