@@ -337,11 +337,9 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
     Powders and liquids fall; gases rise, or fall if heavier than the air
     (``base:empty``'s density). A mover may trade places with a fluid (liquid
     or gas) lighter than itself when falling, denser when rising, each frame
-    with a chance that grows with the gap in density: twice the gap's share
-    of the larger density, so that one at least twice as dense as the other
-    always trades, and one a little denser seldom. Powders and liquids fall
-    through the air (empty cells) freely; a gas at rest starts to rise (or
-    sink) through it with the gap's share of the larger density, so that a
+    by :func:`exchange_chance`, which grows with the gap in their densities.
+    Powders and liquids fall through the air (empty cells) freely; a gas at
+    rest starts to rise (or sink) through it by the same chance, so that a
     cloud rises raggedly, not row by row.
     """
     air = elements[0].spec.density
@@ -357,18 +355,23 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
         if t.fall_dir[a] != 0:
             for b in np.flatnonzero(fluid):
                 if b != a:
-                    t.displace[a, b] = exchange_chance(densities[a], densities[b], int(t.fall_dir[a]), 1.5)
+                    t.displace[a, b] = exchange_chance(densities[a], densities[b], int(t.fall_dir[a]))
             gas = t.archetype[a] == ARCHETYPE_CODES["gas"]
-            t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a]), 1.0) if gas else ALWAYS
+            t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a])) if gas else ALWAYS
     t.displaces[:] = element_masks(t.displace)
 
 
-def exchange_chance(mover: float, other: float, fall_dir: int, eagerness: float) -> int:
+def exchange_chance(mover: float, other: float, fall_dir: int) -> int:
     """The chance (of ALWAYS) that a mover of density ``mover`` falling (+1) or rising (-1)
-    trades places with a fluid of density ``other`` in a frame: ``eagerness`` times the
-    gap's share of the larger density, at most sure, at least 1; 0 where it cannot."""
+    trades places with a fluid of density ``other`` in a frame: 1.5 times the gap's share of
+    the larger density, at most sure (a gap of two thirds or more), at least 1; 0 where it cannot.
+
+    Sand (1600) into water (1000): 0.56; water into oil (850): 0.23; steam (0.6) through the
+    air (1.2): 0.75. Never sure for neighbours close in density, so fluids trade places here
+    and there, as plumes and drops, not whole rows at once.
+    """
     gap = (mover - other) * fall_dir
-    return max(1, min(ALWAYS, int(round(eagerness * ALWAYS * gap / max(mover, other))))) if gap > 0 else 0
+    return max(1, min(ALWAYS, int(round(1.5 * ALWAYS * gap / max(mover, other))))) if gap > 0 else 0
 
 
 @dataclass

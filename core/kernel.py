@@ -810,6 +810,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                             speed = min(cvy * g + accel[e], max_speed[e])
                             cvy = speed * g
                             d0x = _cells_moved(cvx, (r >> 8) & 255)
+                            if kind == GAS and (r & 0x10000) != 0:
+                                d0x += 1 if (r & 0x20000) != 0 else -1  # gas wavers as it rises: a plume, not a line
                             d0y = g * max(1, _cells_moved(speed, r & 255))
                             d1y = g  # if the drift is blocked: straight on, one cell
                             tries = 2
