@@ -666,7 +666,9 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
                         # 3. Reactions: try each touching neighbour once, in a hashed order. First a cheap
                         # test: does any neighbour's bit show in the element's partner mask?
-                        partners = reactive[e] & present if (flags[_at(y, x)] & REACTED) == 0 else 0  # once a frame
+                        partners = reactive[e] & present
+                        if partners != 0 and (flags[_at(y, x)] & REACTED) != 0:
+                            partners = 0  # once a frame
                         if partners != 0:
                             near = 0
                             if x + 1 < width:
@@ -748,7 +750,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                         if (displaces[e] & near) == 0:
                             break
                     opens = False
-                    free_air = displace[e, 0] == ALWAYS  # it moves into empty cells without a roll
+                    free_air = kind != GAS  # it moves into empty cells without a roll (see compiler's exchange_chance)
                     if kind != PARTICLE and _within(ty, height):
                         o = cells[_at(ty, x)]
                         threshold = displace[e, o]
