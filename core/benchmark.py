@@ -7,9 +7,11 @@ compare with other engines' and show what sleeping saves.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.util
 import os
+import subprocess
 import sys
 import time
 from dataclasses import asdict, dataclass
@@ -157,7 +159,7 @@ class BenchResult:
     width: int
     height: int
     steps: int
-    threads: int
+    threads: int | str  # a count, or "auto"
     sleep: bool  # chunks at rest skipped (False: every chunk updated every step)
     seconds: float
     steps_per_second: float
@@ -208,12 +210,10 @@ def state_bytes(world: World) -> int:
     return sum(a.nbytes for a in world.state) + sum((a if a.base is None else a.base).nbytes for a in chunks)
 
 
-def run(bench: Bench, steps: int, threads: int, *, sleep: bool = True, compile_seconds: float = 0.0) -> BenchResult:
-    """Build ``bench``'s world and time ``steps`` steps on ``threads`` threads."""
-    import numba
-
-    numba.set_num_threads(threads)
+def run(bench: Bench, steps: int, threads: int | None, *, sleep: bool = True, compile_seconds: float = 0.0) -> BenchResult:
+    """Build ``bench``'s world and time ``steps`` steps on ``threads`` threads (None: as many as pay)."""
     world = bench.make()
+    world.threads = threads
     awake = 0.0
     started = time.perf_counter()
     for _ in range(steps):
@@ -227,7 +227,7 @@ def run(bench: Bench, steps: int, threads: int, *, sleep: bool = True, compile_s
         width=world.width,
         height=world.height,
         steps=steps,
-        threads=threads,
+        threads=AUTO if threads is None else threads,
         sleep=sleep,
         seconds=round(seconds, 4),
         steps_per_second=round(steps / seconds, 2),
@@ -324,7 +324,7 @@ class Comparison:
     width: int
     height: int
     steps: int
-    threads: int
+    threads: int | str  # a count, or "auto"
     mcell_updates_per_second: float  # this kernel
     against: str
     against_mcell_updates_per_second: float
@@ -343,10 +343,10 @@ class Turns:
     width: int
     height: int
     steps: int
-    threads: int
+    threads: int | str  # a count, or "auto"
     mcell_updates_per_second: float
     speedup: float  # over the first thread count asked for
-    over_threads: int  # that count
+    over_threads: int | str  # that count
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -370,7 +370,7 @@ def _restore(world: World, saved: list[np.ndarray], frame: int) -> None:
 def compare(
     bench: Bench,
     steps: int,
-    threads: int | Sequence[int],
+    threads: int | None | Sequence[int | None],
     kernels: Sequence,
     *,
     segment: int = 25,
@@ -391,15 +391,14 @@ def compare(
     starts from the first kernel's state, wake marks included (any kernel
     accepts another's marks: they only ever cover more than is needed).
     With ``own_frames`` (kernels whose rules differ), each kernel goes on from
-    its own state instead, and frames may differ.
+    its own state instead, and frames may differ. A count of None lets the
+    world choose as it steps (see :mod:`sandmod.threads`).
     """
-    import numba
-
-    counts = [threads] * len(kernels) if isinstance(threads, int) else list(threads)
+    counts = list(threads) if isinstance(threads, (list, tuple)) else [threads] * len(kernels)
     world = bench.make()
     for kernel, count in zip(kernels, counts):  # compile, or load from the cache, before timing
         start, frame = _saved(world), world.frame
-        numba.set_num_threads(count)
+        world.threads = count
         world.kernel = kernel
         world.step()
         _restore(world, start, frame)
@@ -414,7 +413,7 @@ def compare(
         for repeat in range(repeats):
             for k in range(len(kernels)) if repeat % 2 == 0 else reversed(range(len(kernels))):
                 _restore(world, starts[k], frame)
-                numba.set_num_threads(counts[k])
+                world.threads = counts[k]
                 world.kernel = kernels[k]
                 began = time.perf_counter()
                 for _ in range(length):
@@ -481,6 +480,7 @@ def against_yardstick(
         for repeat in range(repeats):
             for k, who in runs if repeat % 2 == 0 else reversed(runs):
                 numba.set_num_threads(threads[k])
+                world.threads = threads[k]
                 if who == KERNEL:  # every count steps the world to the same frames: each run ends where the others do
                     _restore(world, start, frame)
                     began = time.perf_counter()
@@ -494,6 +494,22 @@ def against_yardstick(
                 times[who][k] = min(times[who][k], time.perf_counter() - began)
         best = [[b + t for b, t in zip(bs, ts)] for bs, ts in zip(best, times)]
     return best[KERNEL], best[YARDSTICK]
+
+
+@contextlib.contextmanager
+def busy_processes(count: int):
+    """Keep ``count`` other processes busy (each spinning on a core) while the block runs."""
+    spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(count)]
+    try:
+        yield
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+            spinner.wait()
+
+
+#: How results name the thread count a world chooses as it steps (``--threads auto``).
+AUTO = "auto"
 
 
 def max_threads() -> int:
@@ -510,7 +526,7 @@ class RecordResult:
     width: int
     height: int
     images: int  # one image a step, at one pixel a cell
-    threads: int
+    threads: int | str  # a count, or "auto"
     step_seconds: float
     image_seconds: float  # palette frames from the world's state (colours, shades, scorch, glow)
     encode_seconds: float  # the recorder: add_frame for each, then close (compressing, writing)
@@ -524,12 +540,10 @@ class RecordResult:
 
 def record(bench: Bench, recorder, images: int, threads: int, folder) -> RecordResult:
     """Render ``images`` steps of ``bench``'s world with ``recorder`` into ``folder``, timing each part."""
-    import numba
-
     from .recording import VideoSettings, output_bytes
 
-    numba.set_num_threads(threads)
     world = bench.make()
+    world.threads = threads
     output = Path(folder) / f"bench-{recorder.name}{recorder.extensions[0] if recorder.extensions else ''}"
     if recorder.folder:
         output.mkdir()

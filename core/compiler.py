@@ -18,28 +18,35 @@ import numpy as np
 
 from .errors import Problem, ProblemsError
 from .hashing import chance_threshold
+from .layout import (  # noqa: F401  (names the other modules take from here too)
+    ALWAYS,
+    ARCHETYPE_CODES,
+    BLAST_COLUMNS,
+    BLAST_FLING,
+    BLAST_HEAT,
+    BLAST_LEAVES,
+    BLAST_LEAVES_CHANCE,
+    BLAST_RADIUS,
+    BLAST_SCORCH,
+    BLAST_SPEED,
+    BLAST_STRENGTH,
+    BLAST_X,
+    BLAST_Y,
+    CAP_ONE,
+    COOLED,
+    EXPLOSIVE,
+    FLAMMABLE,
+    HEATED,
+    IGNITES,
+    SUBCELL,
+    TEMP_ONE,
+)
 from .modset import LoadedMod
 from .modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
 from .tomlsource import TomlSource
 
-#: Archetype codes as the kernel knows them.
-ARCHETYPE_CODES = {"empty": 0, "static": 1, "powder": 2, "liquid": 3, "gas": 4, "particle": 5}
-#: Velocities are fixed-point: this many units make one cell per frame.
-SUBCELL = 256
 #: Most elements a ruleset may hold (palette renders use 256 colours).
 MAX_ELEMENTS = 256
-#: Temperatures are fixed-point: this many units make one degree Celsius.
-TEMP_ONE = 16
-#: Heat capacities are fixed-point: this many units make a heat_capacity of 1.
-CAP_ONE = 256
-#: Columns of a blast row (Tables.blast, and the world's queue of explosions).
-BLAST_X, BLAST_Y, BLAST_RADIUS, BLAST_STRENGTH, BLAST_LEAVES, BLAST_LEAVES_CHANCE = range(6)
-BLAST_FLING, BLAST_SPEED, BLAST_HEAT, BLAST_SCORCH = range(6, 10)
-BLAST_COLUMNS = 10
-#: Bits of Tables.thermal: what the kernel checks about a cell's heat each frame.
-HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
-#: Tables.displace: the chance of an exchange in 1/255ths; ALWAYS needs no roll.
-ALWAYS = 255
 _NO_LIMIT = 2**62
 
 

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import os
 
+from . import threads  # noqa: F401  (its settings for numba's threads come before numba)
 from .kernelcache import kernel_cache_dir
 
 os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
@@ -65,7 +66,7 @@ numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was impo
 
 from . import hashing, traversal  # noqa: E402
 from .hashing import ROLL_BITS  # noqa: E402
-from .compiler import (  # noqa: E402
+from .layout import (  # noqa: E402
     ALWAYS,
     ARCHETYPE_CODES,
     BLAST_COLUMNS,
@@ -79,30 +80,29 @@ from .compiler import (  # noqa: E402
     BLAST_STRENGTH,
     BLAST_X,
     BLAST_Y,
-    EXPLOSIVE,
-    FLAMMABLE,
-    IGNITES,
-    SUBCELL,
-    TEMP_ONE,
-)
-from .modspec import MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: E402
-from .prefetch import prefetch  # noqa: E402
-from .world import (  # noqa: E402
     BURNING,
     CACHE_LINE,
     CHUNK,
     CHUNK_SHIFT,
     DETONATING,
+    EXPLOSIVE,
+    FLAMMABLE,
+    IGNITES,
     LOOSE,
+    MAX_TEMPERATURE,
+    MIN_TEMPERATURE,
     MOVED,
     PART,
     REACTED,
     SCORCHED,
+    SUBCELL,
+    TEMP_ONE,
     TILE,
     TILE_SHIFT,
     WAKE_MARGIN,
     WHOLE,
 )
+from .prefetch import prefetch  # noqa: E402
 
 _mix32 = njit(cache=True)(hashing.mix32)
 _spawn_state = njit(cache=True)(hashing.spawn_state)
@@ -1135,12 +1135,12 @@ def conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1):
                 even[_at(cy, cx)] = EVEN
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def clear_marks(flags, awake):
     """Forget last frame's moved and reacted marks, in the awake chunks (no others have any)."""
     height, width = flags.shape
     chunks_y, chunks_x = awake.shape
-    for cy in prange(chunks_y):
+    for cy in range(chunks_y):
         for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
             row = flags[y]
             for cx in range(chunks_x):
@@ -1149,85 +1149,119 @@ def clear_marks(flags, awake):
                     run &= np.uint8(KEPT)  # a whole-slice operation: numba vectorises it, a loop it did not
 
 
-@njit(cache=True, parallel=True)
-def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
-    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one thread per tile at a time,
-    each with or without :func:`step_region`'s fast loop (see :func:`step`)."""
+@njit(inline="always", cache=True)  # it takes arrays: see _wake
+def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route):
+    """Heat, then cells, in tile number ``tile`` (row-major), with or without :func:`step_region`'s fast loop (see :func:`step`)."""
     height, width = s.cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
-    for k in prange(count):
-        tile = tiles[k]
-        x0 = (tile % tiles_x) << TILE_SHIFT
-        y0 = (tile // tiles_x) << TILE_SHIFT
-        x1 = min(x0 + TILE, width)
-        y1 = min(y0 + TILE, height)
-        conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
-        if route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0)):
-            fast_gain[tile] = step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, True)
-        else:
-            step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
+    x0 = (tile % tiles_x) << TILE_SHIFT
+    y0 = (tile // tiles_x) << TILE_SHIFT
+    x1 = min(x0 + TILE, width)
+    y1 = min(y0 + TILE, height)
+    conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
+    if route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0)):
+        fast_gain[tile] = step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, True)
+    else:
+        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
 
 
 @njit(cache=True)
-def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route):
-    """Advance the world by one frame; returns how many explosives went off (see :func:`take_detonations`).
+def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
+    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one after another."""
+    for k in range(count):
+        _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles[k], also_present, fast_gain, route)
 
-    The world is cut into tiles of 2 x 2 chunks, updated in four passes by
-    the parity of their column and row; the tiles of one pass are a tile apart,
-    farther than anything one cell does can reach, so they are updated at the
-    same time on as many threads as there are, with the same result as one
-    after another. Within a tile, heat flows first, then the cells move. Only
-    the rows of chunks that ``awake``'s marks name are touched; ``awake``
-    then holds the marks for the next frame. ``even`` marks chunks whose heat
-    needs no sweep (see :func:`conduct`). ``hands``, the number of threads,
-    only decides which thread takes which tile. ``also_present`` is 0, or -1
-    to look at the neighbours of every cell for partners (see
-    :func:`step_region`): tests compare the two. ``fast_gain`` holds, per
-    tile, how well :func:`step_region`'s fast loop did the last time the
-    tile took it: a tile takes it while it pays, and tries it again every
-    FAST_TRIAL frames when it did not. ``route`` 1 sends every tile through
-    the fast loop and -1 none (tests compare them); 0 chooses so.
-    """
-    flags = s.flags
-    height, width = flags.shape
+
+@njit(cache=True, parallel=True)
+def update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
+    """:func:`update_tiles` on the threads numba has, one tile per thread at a time."""
+    for k in prange(count):
+        _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles[k], also_present, fast_gain, route)
+
+
+@njit(cache=True)
+def _tiles_of_pass(awake, woken, frame, p, hands, todo, order):
+    """The tiles of pass p (0..3) with an awake or woken chunk, into ``order``, dealt out like cards to
+    ``hands`` threads (prange gives each thread one run of the list: each run then holds tiles from all
+    over the world, not one crowded band of it); returns how many."""
     chunks_y, chunks_x = awake.shape
-    tiles_y = (height + TILE - 1) >> TILE_SHIFT
-    tiles_x = (width + TILE - 1) >> TILE_SHIFT
+    tiles_y, tiles_x = (chunks_y + 1) >> 1, (chunks_x + 1) >> 1  # a tile is 2 x 2 chunks
+    px, py = _pass_tiles(p, frame)
+    count = 0
+    for ty in range(py, tiles_y, 2):
+        for tx in range(px, tiles_x, 2):
+            running = False
+            for cy in range(ty * 2, min(ty * 2 + 2, chunks_y)):
+                for cx in range(tx * 2, min(tx * 2 + 2, chunks_x)):
+                    running = running or awake[cy, cx] != 0 or woken[cy, cx, 0] != 0
+            if running:
+                todo[count] = ty * tiles_x + tx
+                count += 1
+    dealt = 0
+    for hand in range(hands):
+        for k in range(hand, count, hands):
+            order[dealt] = todo[k]
+            dealt += 1
+    return count
+
+
+@njit(inline="always", cache=True)  # it takes arrays: see _wake
+def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, at_once):
+    """:func:`step`, its tiles updated by :func:`update_tiles_at_once` where ``at_once`` (a constant
+    in each caller), else by :func:`update_tiles`."""
     woken[:] = 0
     stirred[:] = 0
     detonations[:] = 0
-    clear_marks(flags, awake)
-    todo = np.empty(tiles_y * tiles_x, np.int64)
+    clear_marks(s.flags, awake)
+    todo = np.empty(len(detonations), np.int64)
     order = np.empty_like(todo)
     for p in range(4):
-        # Alternate which rows of tiles go first, so a falling stream crosses each seam in step.
-        px, py = _pass_tiles(p, frame)
-        count = np.int64(0)  # not the literal 0: numba would compile update_tiles a second time for it
-        for ty in range(py, tiles_y, 2):
-            for tx in range(px, tiles_x, 2):
-                running = False
-                for cy in range(ty * 2, min(ty * 2 + 2, chunks_y)):
-                    for cx in range(tx * 2, min(tx * 2 + 2, chunks_x)):
-                        running = running or awake[cy, cx] != 0 or woken[cy, cx, 0] != 0
-                if running:
-                    todo[count] = ty * tiles_x + tx
-                    count += 1
+        count = _tiles_of_pass(awake, woken, frame, p, hands, todo, order)
         if count == 0:
             continue
-        # prange gives each thread one run of the list: deal the tiles out like cards, so
-        # that each run holds tiles from all over the world, not one crowded band of it.
-        dealt = 0
-        for hand in range(hands):
-            for k in range(hand, count, hands):
-                order[dealt] = todo[k]
-                dealt += 1
-        update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
+        if at_once:
+            update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
+        else:
+            update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
+    chunks_y, chunks_x = awake.shape
     for cy in range(chunks_y):
         for cx in range(chunks_x):
             awake[cy, cx] = woken[cy, cx, 0]
             if stirred[cy, cx, 0] != 0:
                 even[cy, cx] = 0
     return detonations.sum()
+
+
+@njit(cache=True)
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route):
+    """Advance the world by one frame, on this thread; returns how many explosives went off (see :func:`take_detonations`).
+
+    The world is cut into tiles of 2 x 2 chunks, updated in four passes by
+    the parity of their column and row; the tiles of one pass are a tile apart,
+    farther than anything one cell does can reach, so they may be updated at
+    the same time on as many threads as there are (:func:`step_at_once`), with
+    the same result as one after another. Within a tile, heat flows first, then
+    the cells move. Only the rows of chunks that ``awake``'s marks name are
+    touched; ``awake`` then holds the marks for the next frame. ``even`` marks
+    chunks whose heat needs no sweep (see :func:`conduct`). ``hands``, the
+    number of threads, only decides which thread takes which tile.
+    ``also_present`` is 0, or -1 to look at the neighbours of every cell for
+    partners (see :func:`step_region`): tests compare the two. ``fast_gain``
+    holds, per tile, how well :func:`step_region`'s fast loop did the last
+    time the tile took it: a tile takes it while it pays, and tries it again
+    every FAST_TRIAL frames when it did not. ``route`` 1 sends every tile
+    through the fast loop and -1 none (tests compare them); 0 chooses so.
+
+    A function of its own, not an argument of one: so that a run on one
+    thread never compiles numba's parallel code, nor starts its threads.
+    """
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, 1, also_present, fast_gain, route, False)
+
+
+@njit(cache=True)
+def step_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route):
+    """:func:`step` on ``hands`` of numba's threads (numba's count set to it)."""
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, True)
 
 
 @njit(cache=True)

@@ -18,9 +18,10 @@ from pathlib import Path
 NOTICE = "compiling the kernel (once per version, about a minute)..."
 
 #: The files whose code or constants the compiled kernels contain: every module kernel.py takes
-#: names from. Numba notices a change to a kernel's own file only (it keeps the values of globals
-#: taken from other modules as they were when it compiled), so the cache folder is named after them.
-KERNEL_SOURCES = ("kernel.py", "hashing.py", "traversal.py", "world.py", "compiler.py", "modspec.py", "prefetch.py")
+#: names from, and nothing else. Numba notices a change to a kernel's own file only (it keeps the
+#: values of globals taken from other modules as they were when it compiled), so the cache folder
+#: is named after them; an edit to any other module compiles nothing anew.
+KERNEL_SOURCES = ("kernel.py", "layout.py", "hashing.py", "traversal.py", "prefetch.py")
 
 #: How many earlier versions of these sources keep their compiled kernels (about 5 MB each).
 KEPT_VERSIONS = 2

@@ -34,6 +34,7 @@ from typing import Annotated, Literal, Union
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
+from .layout import ARCHETYPES, MAX_SPEED, MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: F401  (taken from here too)
 from .validation import PATTERN_HINTS
 
 NAME = r"[a-z][a-z0-9_]*"
@@ -49,16 +50,9 @@ HexColor = Annotated[
     Field(pattern=r"^#[0-9a-fA-F]{6}$", description="A colour as #rrggbb."),
 ]
 
-ARCHETYPES = ("empty", "static", "powder", "liquid", "gas", "particle")
 EMPTY_ID = "base:empty"
 #: The particle element a launched cell becomes (it carries the cell's element).
 PARTICLE_ID = "base:particle"
-#: Fastest any cell may move, in cells per frame. Bounded so that chunks updated
-#: in parallel never reach into each other's cells.
-MAX_SPEED = 16
-#: Temperatures are in degrees Celsius, within these bounds.
-MIN_TEMPERATURE = -273.0
-MAX_TEMPERATURE = 9999.0
 #: Largest explosion radius, in cells.
 MAX_BLAST_RADIUS = 32
 

@@ -12,6 +12,7 @@ and painting a world needs no numba; stepping it does.
 from __future__ import annotations
 
 import math
+from time import perf_counter
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
 
@@ -29,7 +30,27 @@ from .compiler import (
     blast_row,
     temperature_units,
 )
-from .modspec import MAX_SPEED, Explosion
+from .layout import (  # noqa: F401  (names the other modules take from here too)
+    BURNING,
+    CACHE_LINE,
+    CHUNK,
+    CHUNK_SHIFT,
+    DETONATING,
+    LOOSE,
+    MOVED,
+    PART,
+    MAX_SPEED,
+    REACH,
+    REACTED,
+    SCORCHED,
+    TILE,
+    TILE_SHIFT,
+    WAKE_MARGIN,
+    WHOLE,
+)
+from .modspec import Explosion
+from .threads import Chooser
+from .threads import available as threads_available
 from .hashing import (
     ROLL_BITS,
     SALT_MOVE,
@@ -45,34 +66,6 @@ from .hashing import (
     mix32,
     spawn_state,
 )
-
-# Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame;
-# the others travel with the cell and are dropped when it turns into another element.
-MOVED = 1  # moved or changed this frame
-REACTED = 2  # reacted this frame
-LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
-BURNING = 8  # on fire: the timer counts down the burning time
-SCORCHED = 16  # darkened by a blast
-DETONATING = 32  # an explosive going off this frame (its blast comes after the step)
-
-# Sleeping chunks and parallel tiles. The world is cut into chunks of CHUNK x CHUNK
-# cells; a chunk is updated only while something in it or within WAKE_MARGIN cells
-# of it changes. Tiles of 2 x 2 chunks are updated in four passes, the tiles of
-# one pass in parallel: no cell's update reaches further than REACH cells (its
-# fastest move plus a neighbour), so tiles a tile apart never touch the same cells.
-CHUNK_SHIFT = 5
-CHUNK = 1 << CHUNK_SHIFT
-TILE_SHIFT = CHUNK_SHIFT + 1
-TILE = 1 << TILE_SHIFT
-WAKE_MARGIN = 2
-REACH = MAX_SPEED + 1
-# A chunk's wake mark (World.awake, and the kernel's scratch of chunks woken during a
-# step): 0 asleep; WHOLE: every row; else PART | y0 | y1 << 6: only the rows y0..y1
-# (chunk-local, inclusive), those within WAKE_MARGIN of a change. Marks only widen.
-WHOLE = 1
-PART = 1 << 15
-assert 2 * (REACH + WAKE_MARGIN) < TILE, "tiles of one pass must not reach each other's chunks"
-
 
 Switches = tuple[tuple[int, bool], ...]  # (frame, on) pairs from a timeline's start and stop events
 
@@ -184,7 +177,6 @@ class Heater:
         return self.start <= frame < self.stop
 
 
-CACHE_LINE = 64  # bytes
 _AT_REST = np.zeros(0, np.int64)  # no velocities: what World._pour paints is at rest
 
 
@@ -235,6 +227,8 @@ class World:
         self._fast_gain = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile: did the kernel's fast loop pay?
         self._also_present = 0  # -1: the kernel looks for partners next to every cell, none skipped (for tests)
         self._fast_route = 0  # 1: every tile through the kernel's fast loop, -1: none (for tests); 0: as it pays
+        self.threads: int | None = None  # threads to step on; None: as many as pay (see sandmod.threads)
+        self._chooser: Chooser | None = None  # picks them then
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
@@ -417,8 +411,6 @@ class World:
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
         the kernel updates every cell, explosions go off."""
-        from numba import get_num_threads
-
         kernel = self._kernel()
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
@@ -435,7 +427,10 @@ class World:
         for heater in self.heaters:
             if heater.active(self.frame):
                 self.set_temperature(heater.area(self.cells), heater.celsius)
-        went_off = kernel.step(
+        hands = self._thread_count()
+        started = perf_counter()
+        stepper = kernel.step_at_once if hands > 1 and hasattr(kernel, "step_at_once") else kernel.step
+        went_off = stepper(
             self.state,
             self.tables,
             frame_key(self.seed, self.frame, SALT_MOVE),
@@ -447,17 +442,34 @@ class World:
             self._even,
             self._stirred,
             self._detonations,
-            get_num_threads(),
+            hands,
             self._also_present,
             self._fast_gain,
             self._fast_route,
         )
+        if self.threads is None:
+            self._chooser.timed(perf_counter() - started)
         if went_off:  # top to bottom, left to right, whichever thread found them
             self._explode(kernel.take_detonations(self.state, self.tables, self._detonations), 0)
         due = [row for frame, row in self.scheduled if frame == self.frame]
         if due:  # the world file's, in its order
             self._explode(np.array(due), 1)
         self.frame += 1
+
+    def _thread_count(self) -> int:
+        """This frame's thread count: :attr:`threads`, or as many as pay (see :mod:`sandmod.threads`);
+        numba's threads set to it when more than one."""
+        if self.threads is not None:
+            hands = max(1, min(self.threads, threads_available()))
+        else:
+            if self._chooser is None:
+                self._chooser = Chooser(len(self._detonations) // 4)
+            hands = self._chooser.count()
+        if hands > 1:
+            import numba
+
+            numba.set_num_threads(hands)
+        return hands
 
     def counts(self, *, carried: bool = False) -> dict[str, int]:
         """How many cells of each element there are, by element id.

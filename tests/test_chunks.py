@@ -185,10 +185,11 @@ def test_a_cell_emptied_in_a_full_region_takes_the_water_above_on_that_frame(reg
 
 def test_frames_are_the_same_on_any_number_of_threads():
     code = """
-import hashlib, sys, numba
+import hashlib, sys
 from sandmod.loading import load_world
-def run(name, frames):
+def run(name, frames, threads):
     world = load_world(sys.argv[1] + "/" + name + ".toml").world
+    world.threads = threads
     h = hashlib.sha256()
     for _ in range(frames):
         world.step()
@@ -196,11 +197,9 @@ def run(name, frames):
             h.update(array.tobytes())
     return h.hexdigest()
 for name, frames in (("demolition", 280), ("fountain", 120), ("boiling_pool", 120)):
-    numba.set_num_threads(1)
-    one = run(name, frames)
-    for threads in (2, 3, 4):
-        numba.set_num_threads(threads)
-        assert run(name, frames) == one, (name, threads)
+    one = run(name, frames, 1)
+    for threads in (2, 3, 4, None):
+        assert run(name, frames, threads) == one, (name, threads)
 print("same")
 """
     env = os.environ | {"NUMBA_NUM_THREADS": "4"}
@@ -304,3 +303,23 @@ def test_step_calls_the_kernels_with_plain_numbers_not_literal_ones(ruleset):
     step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0, world._fast_gain, 0)
     for called in (kernel.update_tiles, kernel.clear_marks):
         assert called.signatures and not any("Literal" in str(sig) for sig in called.signatures), called
+
+
+def test_a_run_on_one_thread_never_loads_or_starts_the_parallel_kernel():
+    code = """
+import sys
+import numba.np.ufunc.parallel as parallel
+from sandmod import kernel
+from sandmod.loading import load_world
+from sandmod.world import compile_kernels
+compile_kernels()
+world = load_world(sys.argv[1] + "/hourglass.toml").world  # one tile a pass: too small for a second thread
+for _ in range(50):
+    world.step()
+assert not kernel.update_tiles_at_once.signatures and not kernel.step_at_once.signatures
+assert not parallel._is_initialized  # numba's threads were never started
+print("serial")
+"""
+    done = subprocess.run([sys.executable, "-c", code, str(EXAMPLES)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "serial"

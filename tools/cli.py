@@ -49,6 +49,33 @@ def _say(message: str) -> None:
     click.echo(message, err=True)
 
 
+class ThreadCount(click.ParamType):
+    """A number of threads (1 to 256), or auto (None): as many as pay."""
+
+    name = "N|auto"
+
+    def convert(self, value, param, ctx):
+        if value is None or value == "auto":
+            return None
+        if isinstance(value, int):
+            number = value
+        else:
+            try:
+                number = int(value)
+            except ValueError:
+                self.fail(f"{value!r} is neither a number of threads nor auto", param, ctx)
+        if not 1 <= number <= 256:
+            self.fail(f"{number} is not in 1 to 256", param, ctx)
+        return number
+
+
+def _named(count: int | None) -> int | str:
+    """A thread count as results show it: the number, or auto."""
+    from sandmod.benchmark import AUTO
+
+    return AUTO if count is None else count
+
+
 _mods_option = click.option(
     "--mods",
     "mod_dirs",
@@ -72,16 +99,20 @@ _mods_option = click.option(
 @click.option("--still", type=click.Path(dir_okay=False, path_type=Path), help="Also write the last image as a PNG.")
 @click.option("--save-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Save the final state to an .npz file.")
 @click.option("--from-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Start from a saved state (and its frame and seed).")
-@click.option("--threads", type=click.IntRange(1, 256), help="Threads to step the world on (default: all CPUs); the frames are the same on any number.")
+@click.option("--threads", type=ThreadCount(), help="Threads to step the world on, or auto (the default: as many as pay, see below); the frames are the same on any number.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 @_mods_option
 def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, threads, quiet, mod_dirs) -> None:
-    """Simulate WORLD (a world .toml file) and write an animation."""
+    """Simulate WORLD (a world .toml file) and write an animation.
+
+    \b
+    Threads: a world too small for a second thread to pay steps on one; a
+    larger one tries its thread counts as it runs and keeps the faster (on
+    a busy machine, often one). Set OMP_WAIT_POLICY or NUMBA_THREADING_LAYER
+    to change how numba's threads wait and which library runs them.
+    """
     if threads is not None:
         _thread_pool(threads)
-        import numba
-
-        numba.set_num_threads(threads)
     from sandmod.loading import load_world
     from sandmod.recording import output_bytes
     from sandmod.render import Framing
@@ -89,6 +120,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     from sandmod.world import compile_new_kernels
 
     loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed)
+    loaded.world.threads = threads
     warnings = [str(w) for w in loaded.warnings]
     if from_snapshot is not None:
         from sandmod.snapshots import load_snapshot
@@ -556,7 +588,8 @@ def test_(mods, mod_dirs) -> None:
               help="A world file to time, as render starts it (repeatable).")
 @click.option("--size", type=click.IntRange(256, 2048), help="The scenes' width and height in cells.  [default: 512]")
 @click.option("--steps", type=click.IntRange(1, 100000), help="Steps to time.  [default: 1000; a world's own frames]")
-@click.option("--threads", "thread_counts", multiple=True, type=click.IntRange(1, 256), help="Threads (repeatable; default: all CPUs).")
+@click.option("--threads", "thread_counts", multiple=True, type=ThreadCount(), help="Threads, or auto (repeatable; default: auto).")
+@click.option("--busy", type=click.IntRange(0, 256), default=0, help="Keep this many other processes busy on the CPUs while timing, as a user's machine is.")
 @click.option("--no-sleep", is_flag=True, help="Update every chunk every step, as if none could sleep.")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed.  [default: 0; a world's own]")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per run.")
@@ -568,7 +601,7 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
 @click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
 @_mods_option
-def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
+def bench(scenes, worlds, size, steps, thread_counts, busy, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
     """Time the kernel on a built-in scene or a world file: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -612,10 +645,12 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
         raise click.UsageError("--against, --in-turns and --yardstick do not go together: give one")
     if own_frames and not against:
         raise click.UsageError("--own-frames goes with --against")
+    if yardstick and None in thread_counts:
+        raise click.UsageError("--yardstick times fixed thread counts: give --threads N")
     if yardstick and worlds:
         raise click.UsageError("--yardstick runs on the built-in scenes (its rules know sand and water only), not on a --world")
-    thread_counts = thread_counts or (benchmark.max_threads(),)
-    _thread_pool(max(thread_counts))
+    thread_counts = thread_counts or (None,)
+    _thread_pool(max((c for c in thread_counts if c is not None), default=1))
     from sandmod.loading import load_ruleset
     from sandmod.world import compile_kernels
 
@@ -632,6 +667,13 @@ def bench(scenes, worlds, size, steps, thread_counts, no_sleep, seed, as_json, f
         _say(kernelcache.NOTICE)
     compile_seconds = compile_kernels(ruleset)
     runs = [(b, steps or b.steps) for b in benches]
+    with benchmark.busy_processes(busy):
+        _bench_runs(runs, thread_counts, as_json, formats, against, own_frames, in_turns, yardstick, no_sleep, compile_seconds)
+
+
+def _bench_runs(runs, thread_counts, as_json, formats, against, own_frames, in_turns, yardstick, no_sleep, compile_seconds) -> None:
+    from sandmod import benchmark
+
     if formats:
         _bench_recording(formats, runs, thread_counts, as_json)
     elif against:
@@ -660,7 +702,9 @@ def _what(bench, steps: int, unit: str = "steps") -> str:
     return f"{bench.name} {bench.width}x{bench.height}, {steps} {unit}"
 
 
-def _threads(count: int) -> str:
+def _threads(count: int | str | None) -> str:
+    if count is None or count == "auto":
+        return "auto threads"
     return f"{count} thread{'s' * (count > 1)}"
 
 
@@ -690,7 +734,7 @@ def _bench_against(path, runs, thread_counts, as_json, own_frames: bool) -> None
                 first = str(error).strip().splitlines()[0]
                 raise click.BadParameter(f"{path}: does not compile beside this sandmod ({type(error).__name__}: {first})", param_hint="'--against'") from None
             result = benchmark.Comparison(
-                b.name, b.width, b.height, steps, threads, round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3), not own_frames
+                b.name, b.width, b.height, steps, _named(threads), round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3), not own_frames
             )
             _report(
                 result,
@@ -712,7 +756,7 @@ def _bench_in_turns(runs, thread_counts, as_json) -> None:
             click.echo(f"error: {b.name}: {_threads(thread_counts[0])} and more step to other frames (by frame {differ.frame})", err=True)
             sys.exit(1)
         results = [
-            benchmark.Turns(b.name, b.width, b.height, steps, threads, round(cells / took, 1), round(seconds[0] / took, 3), thread_counts[0])
+            benchmark.Turns(b.name, b.width, b.height, steps, _named(threads), round(cells / took, 1), round(seconds[0] / took, 3), _named(thread_counts[0]))
             for threads, took in zip(thread_counts, seconds)
         ]
         if as_json:

@@ -1,0 +1,64 @@
+"""The facts the kernel is compiled with: the cell's flag bits, chunks and tiles, fixed-point
+units, archetype codes and the encodings of the compiled tables.
+
+Only the kernel's own sources (this module, ``kernel.py``, ``hashing.py``,
+``traversal.py``, ``prefetch.py``) name the compiled kernels' cache folder
+(:mod:`sandmod.kernelcache`): an edit anywhere else never compiles them anew.
+"""
+
+from __future__ import annotations
+
+#: The movement archetypes, by their codes in ``Tables.archetype`` (their order is the code).
+ARCHETYPES = ("empty", "static", "powder", "liquid", "gas", "particle")
+ARCHETYPE_CODES = {name: code for code, name in enumerate(ARCHETYPES)}
+
+#: Fastest any cell may move, in cells per frame. Bounded so that chunks updated
+#: in parallel never reach into each other's cells.
+MAX_SPEED = 16
+#: Temperatures are in degrees Celsius, within these bounds.
+MIN_TEMPERATURE = -273.0
+MAX_TEMPERATURE = 9999.0
+
+#: Velocities are fixed-point: this many units make one cell per frame.
+SUBCELL = 256
+#: Temperatures are fixed-point: this many units make one degree Celsius.
+TEMP_ONE = 16
+#: Heat capacities are fixed-point: this many units make a heat_capacity of 1.
+CAP_ONE = 256
+#: Columns of a blast row (Tables.blast, and the world's queue of explosions).
+BLAST_X, BLAST_Y, BLAST_RADIUS, BLAST_STRENGTH, BLAST_LEAVES, BLAST_LEAVES_CHANCE = range(6)
+BLAST_FLING, BLAST_SPEED, BLAST_HEAT, BLAST_SCORCH = range(6, 10)
+BLAST_COLUMNS = 10
+#: Bits of Tables.thermal: what the kernel checks about a cell's heat each frame.
+HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
+#: Tables.displace: the chance of an exchange in 1/255ths; ALWAYS needs no roll.
+ALWAYS = 255
+
+# Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame;
+# the others travel with the cell and are dropped when it turns into another element.
+MOVED = 1  # moved or changed this frame
+REACTED = 2  # reacted this frame
+LOOSE = 4  # a powder grain in motion (free-falling); cleared when it comes to rest
+BURNING = 8  # on fire: the timer counts down the burning time
+SCORCHED = 16  # darkened by a blast
+DETONATING = 32  # an explosive going off this frame (its blast comes after the step)
+
+# Sleeping chunks and parallel tiles. The world is cut into chunks of CHUNK x CHUNK
+# cells; a chunk is updated only while something in it or within WAKE_MARGIN cells
+# of it changes. Tiles of 2 x 2 chunks are updated in four passes, the tiles of
+# one pass in parallel: no cell's update reaches further than REACH cells (its
+# fastest move plus a neighbour), so tiles a tile apart never touch the same cells.
+CHUNK_SHIFT = 5
+CHUNK = 1 << CHUNK_SHIFT
+TILE_SHIFT = CHUNK_SHIFT + 1
+TILE = 1 << TILE_SHIFT
+WAKE_MARGIN = 2
+REACH = MAX_SPEED + 1
+# A chunk's wake mark (World.awake, and the kernel's scratch of chunks woken during a
+# step): 0 asleep; WHOLE: every row; else PART | y0 | y1 << 6: only the rows y0..y1
+# (chunk-local, inclusive), those within WAKE_MARGIN of a change. Marks only widen.
+WHOLE = 1
+PART = 1 << 15
+assert 2 * (REACH + WAKE_MARGIN) < TILE, "tiles of one pass must not reach each other's chunks"
+
+CACHE_LINE = 64  # bytes
