@@ -496,6 +496,62 @@ def against_yardstick(
     return best[KERNEL], best[YARDSTICK]
 
 
+def numpy_image(world: World) -> np.ndarray:
+    """:meth:`World.image` in numpy, as it was before the compiled one: the slow, obvious reference
+    that tests hold the compiled pixels to, and that ``sandmod bench --pixels`` times them against."""
+    from .compiler import GLOW_COLOURS, GLOW_FROM, GLOW_STEP, temperature_units
+    from .layout import SCORCHED
+
+    looks, s = world.ruleset.looks, world.state
+    shown = world.shown()
+    shade = s.shade.astype(np.uint16)
+    frame = looks.normal[shown, (shade * looks.shades) >> 8]
+    scorched = (s.flags & SCORCHED) != 0
+    if scorched.any():
+        frame[scorched] = looks.scorched[shown[scorched], (shade[scorched] * looks.scorched.shape[1]) >> 8]
+    if int(s.heat.max()) >= temperature_units(GLOW_FROM):  # cheap test first: heat >= temperature
+        units = world._temperature_units()
+        start = looks.glow_from[shown]
+        hot = (units > start) & (shown != 0)
+        if hot.any():
+            level = np.minimum((units[hot] - start[hot]) // temperature_units(GLOW_STEP), len(GLOW_COLOURS) - 1)
+            frame[hot] = looks.glow[shown[hot], level]
+    return frame
+
+
+@dataclass(frozen=True)
+class PixelsResult:
+    """A frame to palette indices, compiled and in numpy (``sandmod bench --pixels``)."""
+
+    scene: str
+    width: int
+    height: int
+    compiled_ms: float
+    numpy_ms: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def time_pixels(bench: Bench, steps: int, repeats: int = 5) -> tuple[float, float]:
+    """Milliseconds a frame of ``bench``'s world takes to become palette indices: compiled
+    (:meth:`World.image`) and in numpy (:func:`numpy_image`), each the best of ``repeats``
+    timings taken in turns, after ``steps`` steps (so that there is heat and motion)."""
+    world = bench.make()
+    world.threads = 1
+    for _ in range(steps):
+        world.step()
+    out = np.empty((world.height, world.width), np.uint8)
+    world.image(out)  # compile, or load from the cache
+    best = [float("inf"), float("inf")]
+    for _ in range(repeats):
+        for k, draw in enumerate((lambda: world.image(out), lambda: numpy_image(world))):
+            began = time.perf_counter()
+            draw()
+            best[k] = min(best[k], time.perf_counter() - began)
+    return best[0] * 1000, best[1] * 1000
+
+
 @contextlib.contextmanager
 def busy_processes(count: int):
     """Keep ``count`` other processes busy (each spinning on a core) while the block runs."""

@@ -252,7 +252,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
-    palette, looks = _palette(elements)
+    palette, looks = _palette(elements, t.heat_recip)
     return Ruleset(tuple(mods), elements, reactions, t, palette, looks, ids)
 
 
@@ -652,10 +652,25 @@ class Looks:
     scorched: np.ndarray  # uint8[n, scorched shades]
     glow: np.ndarray  # uint8[n, len(GLOW_COLOURS)]
     glow_from: np.ndarray  # int64[n]: temperature (TEMP_ONE units) where it starts to glow
+    glow_energy: np.ndarray  # int64[n, len(GLOW_COLOURS)]: heat energy from which it glows at each level
 
     @property
     def shades(self) -> int:
         return self.normal.shape[1]
+
+
+def _glow_energies(glow_from: list[int], glow_step: int, heat_recip: list[int]) -> np.ndarray:
+    """For each element, the heat energies from which a cell of it glows at each level (int64,
+    (n, levels)), from the heat capacities' ``heat_recip``: the least energy whose temperature,
+    read as the kernel reads it, is above its glow point, then at least a glow step, two, ...
+    past it. So the pixels compare energies, and multiply nothing, for all but flying particles."""
+    table = np.empty((len(glow_from), len(GLOW_COLOURS)), np.int64)
+    for e, (start, recip) in enumerate(zip(glow_from, heat_recip)):
+        for level in range(len(GLOW_COLOURS)):
+            units = start + 1 if level == 0 else start + level * glow_step  # temperature (energy * recip) >> 32 must reach
+            table[e, level] = -(-(units << 32) // recip)  # the least energy whose product reaches units << 32
+    table[0] = np.iinfo(np.int64).max  # the air never glows
+    return table
 
 
 def _palette_sizes(n: int) -> tuple[int, int]:
@@ -668,7 +683,7 @@ def _palette_sizes(n: int) -> tuple[int, int]:
     return max(1, 256 // n), 0  # so many elements that only shades fit: no scorch or glow colours
 
 
-def _palette(elements: Sequence[ElementInfo]) -> tuple[bytes, Looks]:
+def _palette(elements: Sequence[ElementInfo], heat_recip: np.ndarray) -> tuple[bytes, Looks]:
     """One shared 256-colour palette: each element's shades, darker scorched shades and glow levels.
 
     The empty cell (air) gets shades only: it neither scorches nor glows.
@@ -683,6 +698,7 @@ def _palette(elements: Sequence[ElementInfo]) -> tuple[bytes, Looks]:
         np.zeros((n, max(scorched, 1)), np.uint8),
         np.zeros((n, len(GLOW_COLOURS)), np.uint8),
         np.array(glow_from, np.int64),
+        _glow_energies(glow_from, temperature_units(GLOW_STEP), heat_recip.tolist()),
     )
     entry = 0
 

@@ -11,6 +11,7 @@ and painting a world needs no numba; stepping it does.
 
 from __future__ import annotations
 
+import functools
 import math
 from time import perf_counter
 from dataclasses import dataclass
@@ -20,8 +21,6 @@ import numpy as np
 
 from .compiler import (
     ARCHETYPE_CODES,
-    GLOW_COLOURS,
-    GLOW_FROM,
     GLOW_STEP,
     SUBCELL,
     TEMP_ONE,
@@ -486,27 +485,47 @@ class World:
         s = self.state
         return np.where(s.carry != 0, s.carry, s.cells)
 
-    def image(self) -> np.ndarray:
-        """Palette indices of every cell, (height, width).
+    def image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
+        """Palette indices of every cell, (height, width), into ``out`` when given.
 
         A cell shows its element's colour in its own shade; scorched cells are
-        darker, and cells hotter than the glow point glow red, orange, then yellow.
+        darker, and cells hotter than the glow point glow red, orange, then
+        yellow. With ``changed_only``, only the chunks that may have changed in
+        the last step are drawn (``out`` holds the rest from before).
         """
+        from . import pixels
+
         looks, s = self.ruleset.looks, self.state
-        shown = self.shown()
-        shade = s.shade.astype(np.uint16)
-        frame = looks.normal[shown, (shade * looks.shades) >> 8]
-        scorched = (s.flags & SCORCHED) != 0
-        if scorched.any():
-            frame[scorched] = looks.scorched[shown[scorched], (shade[scorched] * looks.scorched.shape[1]) >> 8]
-        if int(s.heat.max()) >= temperature_units(GLOW_FROM):  # cheap test first: heat >= temperature
-            units = self._temperature_units()
-            start = looks.glow_from[shown]
-            hot = (units > start) & (shown != 0)
-            if hot.any():
-                level = np.minimum((units[hot] - start[hot]) // temperature_units(GLOW_STEP), len(GLOW_COLOURS) - 1)
-                frame[hot] = looks.glow[shown[hot], level]
-        return frame
+        out = np.empty((self.height, self.width), np.uint8) if out is None else out
+        chunks = self.awake if changed_only else _ALL_CHUNKS
+        pixels.palette_indices(
+            s.cells, s.carry, s.shade, s.flags, s.heat, self.tables.heat_recip,
+            looks.normal, looks.scorched, looks.glow, looks.glow_from, _GLOW_STEP, looks.glow_energy, chunks, out,
+        )
+        return out
+
+    def heat_image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
+        """Every cell's temperature as a colour, RGB (height, width, 3): blue cold, dark at 20 degrees,
+        then purple, red, orange, yellow and white (see :data:`sandmod.pixels.HEAT_SCALE`)."""
+        from . import pixels
+
+        out = np.empty((self.height, self.width, 3), np.uint8) if out is None else out
+        pixels.heat_rgb(self.cells, self.state.heat, self.tables.heat_recip, _heat_colours(), self.awake if changed_only else _ALL_CHUNKS, out)
+        return out
+
+    def rgb(self) -> np.ndarray:
+        """The frame in colour, RGB (height, width, 3): :meth:`image` through the palette."""
+        return np.frombuffer(self.ruleset.palette, np.uint8).reshape(256, 3)[self.image()]
+
+_ALL_CHUNKS = np.zeros((0, 0), np.uint16)  # pixels' chunk mask for "every chunk"
+_GLOW_STEP = temperature_units(GLOW_STEP)
+
+
+@functools.cache
+def _heat_colours() -> np.ndarray:
+    from .pixels import heat_colours
+
+    return heat_colours()
 
 
 def compile_kernels(ruleset: Ruleset | None = None) -> float:
@@ -531,6 +550,8 @@ def compile_kernels(ruleset: Ruleset | None = None) -> float:
     world.step()
     world.spawn_particles(np.zeros(1, np.int64), np.zeros(1, np.int64), 0, 0.0, 0.0)  # what emitters and sprays paint with
     world._explode(world._kernel().take_detonations(world.state, world.tables, world._detonations), 0)
+    world.image()
+    world.heat_image()
     kernelcache.mark_compiled()
     return time.perf_counter() - started
 

@@ -589,6 +589,7 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--size", type=click.IntRange(256, 2048), help="The scenes' width and height in cells.  [default: 512]")
 @click.option("--steps", type=click.IntRange(1, 100000), help="Steps to time.  [default: 1000; a world's own frames]")
 @click.option("--threads", "thread_counts", multiple=True, type=ThreadCount(), help="Threads, or auto (repeatable; default: auto).")
+@click.option("--pixels", is_flag=True, help="Time turning a frame into palette indices instead, compiled against numpy.")
 @click.option("--busy", type=click.IntRange(0, 256), default=0, help="Keep this many other processes busy on the CPUs while timing, as a user's machine is.")
 @click.option("--no-sleep", is_flag=True, help="Update every chunk every step, as if none could sleep.")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed.  [default: 0; a world's own]")
@@ -601,7 +602,7 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
 @click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
 @_mods_option
-def bench(scenes, worlds, size, steps, thread_counts, busy, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
+def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
     """Time the kernel on a built-in scene or a world file: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -618,6 +619,13 @@ def bench(scenes, worlds, size, steps, thread_counts, busy, no_sleep, seed, as_j
 
     With --record, each step also makes an image and a recorder encodes it:
     prints images encoded a second and encoding's share of the render.
+    --pixels times turning a frame (after up to 100 steps) into palette
+    indices, the compiled way World.image does and the numpy way it did,
+    in turns, on one thread.
+
+    --busy N keeps N other processes spinning on the CPUs while it times,
+    as on a user's machine: with --threads auto --threads 1 --in-turns it
+    shows what the default thread count does when the machine is busy.
 
     With --against, this kernel and the other take turns over stretches of
     25 steps, each stretch three times from the same state, and the best
@@ -667,6 +675,15 @@ def bench(scenes, worlds, size, steps, thread_counts, busy, no_sleep, seed, as_j
         _say(kernelcache.NOTICE)
     compile_seconds = compile_kernels(ruleset)
     runs = [(b, steps or b.steps) for b in benches]
+    if pixels:
+        for b, count in runs:
+            compiled, numpy = benchmark.time_pixels(b, min(count, 100))
+            _report(
+                benchmark.PixelsResult(b.name, b.width, b.height, round(compiled, 3), round(numpy, 3)),
+                as_json,
+                f"{b.name} {b.width}x{b.height}, a frame to pixels: {compiled:.3f} ms compiled, {numpy:.3f} ms in numpy ({numpy / compiled:.1f}x)",
+            )
+        return
     with benchmark.busy_processes(busy):
         _bench_runs(runs, thread_counts, as_json, formats, against, own_frames, in_turns, yardstick, no_sleep, compile_seconds)
 
