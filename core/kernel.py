@@ -51,22 +51,12 @@ each tile takes it while it pays, and the frames are the same either way.
 
 from __future__ import annotations
 
-import os
+import numpy as np
 
-from . import threads  # noqa: F401  (its settings for numba's threads come before numba)
-from .kernelcache import kernel_cache_dir
-
-os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
-
-import numba  # noqa: E402
-import numpy as np  # noqa: E402
-from numba import njit, prange  # noqa: E402
-
-numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was imported before us
-
-from . import hashing, traversal  # noqa: E402
-from .hashing import ROLL_BITS  # noqa: E402
-from .layout import (  # noqa: E402
+from . import hashing, traversal
+from .jit import njit, numba, prange
+from .hashing import ROLL_BITS
+from .layout import (
     ALWAYS,
     ARCHETYPE_CODES,
     BLAST_COLUMNS,
@@ -102,7 +92,7 @@ from .layout import (  # noqa: E402
     WAKE_MARGIN,
     WHOLE,
 )
-from .prefetch import prefetch  # noqa: E402
+from .prefetch import prefetch
 
 _mix32 = njit(cache=True)(hashing.mix32)
 _spawn_state = njit(cache=True)(hashing.spawn_state)

@@ -21,7 +21,7 @@ NOTICE = "compiling the kernel (once per version, about a minute)..."
 #: names from, and nothing else. Numba notices a change to a kernel's own file only (it keeps the
 #: values of globals taken from other modules as they were when it compiled), so the cache folder
 #: is named after them; an edit to any other module compiles nothing anew.
-KERNEL_SOURCES = ("kernel.py", "pixels.py", "layout.py", "hashing.py", "traversal.py", "prefetch.py")
+KERNEL_SOURCES = ("kernel.py", "pixels.py", "jit.py", "layout.py", "hashing.py", "traversal.py", "prefetch.py")
 
 #: How many earlier versions of these sources keep their compiled kernels (about 5 MB each).
 KEPT_VERSIONS = 2

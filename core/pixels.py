@@ -14,16 +14,10 @@ only what changed.
 
 from __future__ import annotations
 
-import os
+import numpy as np
 
-from .kernelcache import kernel_cache_dir
-
-os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when numba is first imported
-
-import numpy as np  # noqa: E402
-from numba import njit  # noqa: E402
-
-from .layout import CHUNK_SHIFT, MAX_TEMPERATURE, MIN_TEMPERATURE, SCORCHED, TEMP_ONE  # noqa: E402
+from .jit import njit
+from .layout import CHUNK_SHIFT, MAX_TEMPERATURE, MIN_TEMPERATURE, SCORCHED, TEMP_ONE
 
 #: The heat view's colours: (degrees Celsius, RGB), linear between them.
 HEAT_SCALE = (
