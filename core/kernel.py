@@ -1155,16 +1155,10 @@ def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
         step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
 
 
-@njit(cache=True)
-def update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
-    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major), one after another."""
-    for k in range(count):
-        _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles[k], also_present, fast_gain, route)
-
-
 @njit(cache=True, parallel=True)
 def update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
-    """:func:`update_tiles` on the threads numba has, one tile per thread at a time."""
+    """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major) on the threads numba
+    has, one tile per thread at a time."""
     for k in prange(count):
         _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles[k], also_present, fast_gain, route)
 
@@ -1198,7 +1192,7 @@ def _tiles_of_pass(awake, woken, frame, p, hands, todo, order):
 @njit(inline="always", cache=True)  # it takes arrays: see _wake
 def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, at_once):
     """:func:`step`, its tiles updated by :func:`update_tiles_at_once` where ``at_once`` (a constant
-    in each caller), else by :func:`update_tiles`."""
+    in each caller), else one after another here."""
     woken[:] = 0
     stirred[:] = 0
     detonations[:] = 0
@@ -1211,8 +1205,9 @@ def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
             continue
         if at_once:
             update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
-        else:
-            update_tiles(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
+        else:  # here, not in a function of its own: one function less that links the cells' update
+            for k in range(count):
+                _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order[k], also_present, fast_gain, route)
     chunks_y, chunks_x = awake.shape
     for cy in range(chunks_y):
         for cx in range(chunks_x):
@@ -1245,7 +1240,8 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     A function of its own, not an argument of one: so that a run on one
     thread never compiles numba's parallel code, nor starts its threads.
     """
-    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, 1, also_present, fast_gain, route, False)
+    one = np.int64(1)  # not the literal 1: numba would compile what it is passed to a second time for it
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, False)
 
 
 @njit(cache=True)

@@ -15,7 +15,7 @@ from importlib import metadata
 from pathlib import Path
 
 #: What the commands (and the pytest plugin) say before they compile a new version's kernels.
-NOTICE = "compiling the kernel (once per version, about a minute)..."
+NOTICE = "compiling the kernel (once per version, under half a minute on a few cores)..."
 
 #: The files whose code or constants the compiled kernels contain: every module kernel.py takes
 #: names from, and nothing else. Numba notices a change to a kernel's own file only (it keeps the
@@ -75,7 +75,7 @@ def is_compiled() -> bool:
 
 
 def mark_compiled() -> None:
-    """Note that the kernels are compiled and cached (:func:`sandmod.world.compile_kernels` does),
+    """Note that the kernels are compiled and cached (:func:`sandmod.warmup.compile_kernels` does),
     and remove the compiled kernels of this copy's older versions."""
     setting = _setting(SOURCES)
     try:

@@ -1,9 +1,9 @@
 """How many threads a world steps on: more only where they pay, measured as the world runs.
 
 The frames are the same on any number of threads, so the number is free to
-change from frame to frame. A world whose passes hold too few tiles for a
-second thread to take any (most example worlds) steps on one, and then
-never starts numba's threads at all. A larger one starts on all of them and
+change from frame to frame. A world whose passes hold few tiles (smaller
+than 256 x 256 cells, like the example worlds) steps on one, and then never
+compiles or starts numba's parallel code at all. A larger one starts on all of them and
 every :data:`PERIOD` frames steps a few on the other count: it keeps
 whichever ran faster. On a busy machine (another program on a core) that
 is one thread, on an idle one all of them.
@@ -32,6 +32,9 @@ SPIN = "1000"
 FIRST, PERIOD, TRIAL = 4, 64, 4
 #: The other count is kept when its frames took less than this share of the current count's.
 BETTER = 0.95
+#: Worlds with fewer tiles in a pass (smaller than 256 x 256 cells) step on one thread: what a
+#: second saves them is a fraction of a second a render, less than compiling its kernel costs.
+MIN_TILES_A_PASS = 4
 
 if "OMP_WAIT_POLICY" not in os.environ:
     os.environ.setdefault("GOMP_SPINCOUNT", SPIN)
@@ -69,7 +72,7 @@ class Chooser:
     """
 
     def __init__(self, tiles_a_pass: int):
-        self.most = max(1, min(available(), tiles_a_pass))  # a thread takes at least a tile a pass
+        self.most = min(available(), tiles_a_pass) if tiles_a_pass >= MIN_TILES_A_PASS else 1
         self.current = self.most
         self._frame = 0
         self._recent: list[float] = []  # the seconds of the last 2 x TRIAL frames

@@ -16,7 +16,9 @@ from click.testing import CliRunner
 from sandmod import benchmark, kernelcache
 from sandmod.tools.cli import cli
 from sandmod.compiler import BLAST_COLUMNS
-from sandmod.world import World, compile_kernels
+from sandmod import warmup
+from sandmod.warmup import compile_kernels
+from sandmod.world import World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 KEYS = {
@@ -162,11 +164,19 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
         def explode(self, *args):
             called.append("explode")
 
+        def conduct(self, *args):
+            called.append("conduct")
+
+        def paint_cells(self, *args):
+            called.append("paint_cells")
+            return 0
+
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(World, "kernel", Recording())
+    monkeypatch.setattr(warmup, "_compile_parts", lambda progress: called.append("parts"))  # no compiling processes
     assert not kernelcache.is_compiled()
     compile_kernels(ruleset)
-    assert called == ["step", "take_detonations", "explode"]
+    assert called == ["parts", "step", "conduct", "take_detonations", "explode", "paint_cells"]
     assert kernelcache.is_compiled()
 
 

@@ -295,13 +295,13 @@ def test_worlds_of_every_size_give_the_kernel_the_same_types(ruleset, size):
 
 def test_step_calls_the_kernels_with_plain_numbers_not_literal_ones(ruleset):
     """A literal argument (``count = 0`` passed on) makes numba compile the callee again for that
-    one value: update_tiles and all it calls, a quarter of a minute more on a first run."""
+    one value: the cells' update and all it calls, a quarter of a minute more on a first run."""
     from sandmod import kernel
 
     world = World(ruleset, 100, 70)
     step = numba.njit(kernel.step.py_func)  # typed here, so the kernels it calls are looked up (in the cache) again
     step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0, world._fast_gain, 0)
-    for called in (kernel.update_tiles, kernel.clear_marks):
+    for called in (kernel.conduct, kernel.clear_marks, kernel._tiles_of_pass):
         assert called.signatures and not any("Literal" in str(sig) for sig in called.signatures), called
 
 
@@ -311,7 +311,7 @@ import sys
 import numba.np.ufunc.parallel as parallel
 from sandmod import kernel
 from sandmod.loading import load_world
-from sandmod.world import compile_kernels
+from sandmod.warmup import compile_kernels
 compile_kernels()
 world = load_world(sys.argv[1] + "/hourglass.toml").world  # one tile a pass: too small for a second thread
 for _ in range(50):

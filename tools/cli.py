@@ -117,7 +117,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     from sandmod.recording import output_bytes
     from sandmod.render import Framing
     from sandmod.render import render as run
-    from sandmod.world import compile_new_kernels
+    from sandmod.warmup import compile_new_kernels, compile_parallel
 
     loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed)
     loaded.world.threads = threads
@@ -135,6 +135,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     framing = Framing(scale or settings.scale, _crop(loaded, crop))
     frames = frames or settings.frames
     compile_new_kernels(loaded.world.ruleset, announce=None if quiet else _say)
+    compile_parallel(loaded.world, announce=None if quiet else _say)
     started = time.perf_counter()
     options = dict(
         frames=frames,
@@ -543,7 +544,7 @@ def test_(mods, mod_dirs) -> None:
     from sandmod.loading import load_registry
     from sandmod.modset import discover_mods
     from sandmod.modtests import TestRunner
-    from sandmod.world import compile_new_kernels
+    from sandmod.warmup import compile_new_kernels
 
     folders = _mod_folders(mod_dirs)
     modset, problems = discover_mods(load_registry(), folders)
@@ -660,7 +661,7 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, se
     thread_counts = thread_counts or (None,)
     _thread_pool(max((c for c in thread_counts if c is not None), default=1))
     from sandmod.loading import load_ruleset
-    from sandmod.world import compile_kernels
+    from sandmod.warmup import compile_kernels, compile_parallel
 
     benches = []
     for path in worlds:  # every file checked before anything is timed
@@ -673,7 +674,9 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, se
         benches[:0] = [benchmark.scene_bench(ruleset, scene, size or 512, seed or 0) for scene in scenes or ("mix",)]
     if not kernelcache.is_compiled():
         _say(kernelcache.NOTICE)
-    compile_seconds = compile_kernels(ruleset)
+    compile_seconds = compile_kernels(ruleset, announce=_say if not kernelcache.is_compiled() else None)
+    if any(count != 1 for count in thread_counts):
+        compile_parallel(announce=_say)
     runs = [(b, steps or b.steps) for b in benches]
     if pixels:
         for b, count in runs:

@@ -33,7 +33,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     """Compile a new version's kernels before the first mod test, saying so, rather than stall in it."""
     if not any(isinstance(item, ModTestItem) for item in session.items):
         return
-    from sandmod.world import compile_new_kernels
+    from sandmod.warmup import compile_new_kernels
 
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
     compile_new_kernels(announce=None if reporter is None else lambda notice: reporter.write_line(f"sandmod: {notice}"))

@@ -1,0 +1,156 @@
+"""Compiling the kernels before a run needs them: their parts side by side, one process each,
+saying on the terminal how far along it is.
+
+numba compiles a function when it is first called, and caches what it
+compiled on disk (:mod:`sandmod.kernelcache`); a later process loads it in a
+fraction of a second. The parts that take longest (the cell update with and
+without its fast loop, about a quarter of a minute each) do not depend on
+each other, so :func:`compile_kernels` compiles each in a process of its own,
+as many at once as there are CPUs, then steps a tiny world itself: what the
+parts left to link loads from the cache. Run as ``python -m sandmod.warmup
+PART``, this module compiles one part.
+
+Compiled only when a run needs it: the kernel that updates tiles on several
+threads at once (:func:`compile_parallel`), for worlds large enough to use
+more than one.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from typing import Callable
+
+import numpy as np
+
+#: The parts compiled side by side, longest first.
+PARTS = ("cells with the fast loop", "cells without it", "heat", "blasts", "taps and sprays", "pixels")
+
+
+def _tiny_world():
+    from .layout import CHUNK
+    from .loading import load_ruleset
+    from .world import World
+
+    return World(load_ruleset(), CHUNK, CHUNK)
+
+
+def compile_part(part: str) -> None:
+    """Compile one of :data:`PARTS` (into the cache), by calling it on a tiny world."""
+    world = _tiny_world()
+    kernel, s, t = world._kernel(), world.state, world.tables
+    if part in PARTS[:2]:
+        kernel.step_region(s, t, 1, 2, 3, 0, world.awake, world._woken, world._stirred, world._detonations, 0, 0, 0, 4, 4, 0, part == PARTS[0])
+    elif part == "heat":
+        kernel.conduct(s, t, 0, world.awake, world._woken, world._even, world._stirred, 0, 0, 4, 4)
+    elif part == "blasts":
+        world._explode(kernel.take_detonations(s, t, world._detonations), 0)
+    elif part == "taps and sprays":
+        world.spawn_particles(np.zeros(1, np.int64), np.zeros(1, np.int64), 0, 0.0, 0.0)
+    elif part == "pixels":
+        world.image()
+        world.heat_image()
+    else:
+        raise ValueError(f"no part {part!r}")
+
+
+def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = None) -> float:
+    """Compile (or load from the cache) every kernel a world on one thread uses: the
+    :data:`PARTS` side by side in processes of their own, then a step of a tiny world of
+    ``ruleset`` (default: the bundled mods') here; then note this version as compiled
+    (:mod:`sandmod.kernelcache`). ``announce`` hears how far along it is. Returns the seconds.
+
+    A world compiles each kernel when it first needs it, so without this the first
+    explosion after a new version would stop a render for a while, unannounced.
+    """
+    from . import kernelcache
+
+    started = time.perf_counter()
+    say = announce or (lambda line: None)
+    if not kernelcache.is_compiled():
+        _compile_parts(lambda done: say(f"compiling the kernel: {done} of {len(PARTS)} parts done, {time.perf_counter() - started:.0f} s"))
+        say("compiling the kernel: putting the parts together...")
+    world = _tiny_world() if ruleset is None else _world_of(ruleset)
+    world.threads = 1
+    world.step()
+    for part in PARTS[2:]:  # in the cache by now: loaded, not compiled
+        compile_part(part)
+    kernelcache.mark_compiled()
+    return time.perf_counter() - started
+
+
+def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None = None) -> None:
+    """:func:`compile_kernels` if this version's are not compiled yet, first handing
+    ``announce`` (when given) the notice to show (:data:`sandmod.kernelcache.NOTICE`), then
+    how far along it is."""
+    from . import kernelcache
+
+    if kernelcache.is_compiled():
+        return
+    if announce is not None:
+        announce(kernelcache.NOTICE)
+    compile_kernels(ruleset, announce)
+
+
+def compile_parallel(world=None, announce: Callable[[str], object] | None = None) -> None:
+    """Compile (or load) the kernel that updates a pass's tiles on several threads at once,
+    if ``world`` (any, if None) may step on several."""
+    from .threads import MIN_TILES_A_PASS, available
+
+    if available() < 2:
+        return
+    if world is not None and ((world.threads or 2) < 2 or len(world._detonations) // 4 < MIN_TILES_A_PASS):
+        return
+    if announce is not None and not _cached("step_at_once"):
+        announce("compiling the kernel for several threads (once per version, some seconds)...")
+    tiny = _tiny_world()
+    tiny.threads = 2
+    tiny.step()
+
+
+def _world_of(ruleset):
+    from .layout import CHUNK
+    from .world import World
+
+    return World(ruleset, CHUNK, CHUNK)
+
+
+def _cached(function: str) -> bool:
+    from .kernelcache import kernel_cache_dir
+
+    return any(kernel_cache_dir().rglob(f"kernel.{function}-*.nbi"))
+
+
+def _compile_parts(progress: Callable[[int], object]) -> None:
+    """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs."""
+    waiting = list(PARTS)
+    running: list[subprocess.Popen] = []
+    done = 0
+    most = max(1, min(os.cpu_count() or 1, len(PARTS)))
+    env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
+    try:
+        while waiting or running:
+            while waiting and len(running) < most:
+                command = [sys.executable, "-m", "sandmod.warmup", waiting.pop(0)]
+                # What fails here fails again, and says why, when this process compiles it itself.
+                running.append(subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            time.sleep(0.05)
+            for process in [p for p in running if p.poll() is not None]:
+                running.remove(process)
+                done += 1
+                progress(done)
+    finally:
+        for process in running:
+            process.kill()
+
+
+def _cache_dir():
+    from .kernelcache import kernel_cache_dir
+
+    return kernel_cache_dir()
+
+
+if __name__ == "__main__":
+    compile_part(sys.argv[1])
