@@ -323,3 +323,30 @@ print("serial")
     done = subprocess.run([sys.executable, "-c", code, str(EXAMPLES)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "serial"
+
+
+@pytest.mark.parametrize("start", ["fork", "spawn"])
+def test_worker_processes_step_the_same_frames_after_the_parent_started_threads(start, tmp_path):
+    # GNU OpenMP cannot run in a child forked after its threads started: such a child steps on one.
+    code = """
+import multiprocessing, sys
+from sandmod import benchmark
+from sandmod.loading import load_ruleset
+ruleset = load_ruleset()
+def work(threads):
+    world = benchmark.scene_bench(ruleset, "mix", 256).make()
+    world.threads = threads
+    for _ in range(20):
+        world.step()
+    return benchmark.state_digest(world)
+if __name__ == "__main__":
+    parent = work(2)  # numba's threads started here
+    with multiprocessing.get_context(sys.argv[1]).Pool(2) as pool:
+        assert pool.map(work, [2, None, 1]) == [parent] * 3
+    print("same")
+"""
+    script = tmp_path / "workers.py"  # spawned workers import their function from a real file
+    script.write_text(code)
+    done = subprocess.run([sys.executable, str(script), start], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "same"
