@@ -51,6 +51,15 @@ class LoadedWorld:
     registry: Registry
     warnings: list[Problem] = field(default_factory=list)  # e.g. other mod versions than it was made with
 
+    @property
+    def inputs(self) -> list[Path]:
+        """The files the world is made from: the world file and its pictures."""
+        from .worldspec import Picture
+
+        shapes = [*self.spec.scene, *(event.paint for event in self.spec.timeline if event.paint is not None)]
+        folder = self.source.folder or Path(".")
+        return [self.path, *(folder / shape.file for shape in shapes if isinstance(shape, Picture))]
+
 
 def world_mod_dirs(path: Path, extra: Iterable[Path] = ()) -> list[Path]:
     """Mod folders for a world: a ``mods/`` beside the world file, then ``extra``."""

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .errors import display_path
+from .userfiles import NO_SUCH_FILE, Refused, open_regular
 
 #: Pixels less opaque than this are transparent: they leave their cells alone.
 OPAQUE = 128
@@ -23,19 +25,28 @@ def hex_rgb(colour: str) -> tuple[int, int, int]:
     return int(colour[1:3], 16), int(colour[3:5], 16), int(colour[5:7], 16)
 
 
-def read_rgba(path: Path) -> np.ndarray:
-    """The picture at ``path`` as a (height, width, 4) uint8 array; PictureError if it cannot be read."""
+def read_rgba(path: Path, max_pixels: int | None = None) -> np.ndarray:
+    """The picture at ``path`` as a (height, width, 4) uint8 array; PictureError if it cannot be read
+    or has more than ``max_pixels`` pixels (checked from its header, before it is decoded)."""
     from PIL import Image, UnidentifiedImageError
 
+    shown = display_path(path)
+    too_large = f"{shown} has more pixels than the memory limit allows (raise it with --max-memory)"
     try:
-        with Image.open(path) as image:
-            return np.asarray(image.convert("RGBA"))
-    except FileNotFoundError:
-        raise PictureError(f"no such image: {display_path(path)}") from None
+        with warnings.catch_warnings(), open_regular(path) as file:
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # the memory limit decides
+            with Image.open(file) as image:
+                if max_pixels is not None and image.width * image.height > max_pixels:
+                    raise PictureError(too_large)
+                return np.asarray(image.convert("RGBA"))
+    except Refused as exc:
+        raise PictureError(f"no such image: {shown}" if str(exc) == NO_SUCH_FILE else f"cannot read image {shown}: {exc}") from None
+    except Image.DecompressionBombError:
+        raise PictureError(too_large) from None
     except UnidentifiedImageError:
-        raise PictureError(f"not an image pillow can read: {display_path(path)}") from None
-    except OSError as exc:
-        raise PictureError(f"cannot read image {display_path(path)}: {exc}") from None
+        raise PictureError(f"not an image pillow can read: {shown}") from None
+    except (OSError, ValueError, SyntaxError) as exc:  # pillow's plugins raise any of these on bad data
+        raise PictureError(f"cannot read image {shown}: {exc}") from None
 
 
 def legend_indices(rgba: np.ndarray, colours: list[tuple[int, int, int]], *, nearest: bool) -> np.ndarray:

@@ -13,6 +13,7 @@ from .errors import Problem, ProblemsError
 from .pictures import PictureError, fit, hex_rgb, legend_indices, read_rgba
 from .shapes import circle_mask, fill_mask, rect_mask, stroke_mask
 from .tomlsource import Loc, TomlSource
+from .userfiles import Refused, inside
 from .world import Emitter, Heater, Painting, Spray, Switches, World
 from .worldspec import (
     Burst,
@@ -101,12 +102,12 @@ class _Builder:
         if box_width < 1 or box_height < 1 or picture.x >= world.width or picture.y >= world.height:
             self.note(loc, f"the picture's box lies outside the {world.width}x{world.height} world")
             return None
-        folder = self.source.path.parent if self.source.path is not None else Path(".")
+        folder = self.source.folder or Path(".")
         try:
-            rgba = read_rgba(folder / picture.file)
+            rgba = read_rgba(inside(folder, picture.file, "picture"))
             colours = [hex_rgb(c) for c in picture.legend]
             indices = legend_indices(rgba, colours, nearest=picture.match == "nearest")
-        except PictureError as exc:
+        except (PictureError, Refused) as exc:
             self.note(loc + ("file",), str(exc))
             return None
         if None in elements:

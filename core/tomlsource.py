@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from .errors import Problem, ProblemsError, display_path
+from .userfiles import Refused, read_bytes
 
 Loc = tuple[str | int, ...]
 
@@ -172,20 +173,22 @@ class TomlSource:
     text: str
     data: dict[str, Any]
     positions: dict[Loc, tuple[int, int]] = field(default_factory=dict)  # key path -> (line, column)
-    path: Path | None = None  # the file it was read from, if any
+    path: Path | None = None  # the file it was read from, if any (symlinks resolved)
+    folder: Path | None = None  # the folder of the path the file was read by (a symlink's own folder)
 
     @classmethod
     def read(cls, path: str | Path) -> "TomlSource":
         """Read and parse ``path``; raise :class:`ProblemsError` for unreadable or invalid TOML."""
         name = display_path(path)
         try:
-            text = Path(path).read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ProblemsError([Problem(name, None, "", f"cannot read file: {exc.strerror or exc}")])
+            text = read_bytes(path).decode("utf-8")
+        except Refused as exc:
+            raise ProblemsError([Problem(name, None, "", f"cannot read file: {exc}")]) from None
         except UnicodeDecodeError:
-            raise ProblemsError([Problem(name, None, "", "file is not UTF-8 text")])
+            raise ProblemsError([Problem(name, None, "", "file is not UTF-8 text")]) from None
         source = cls.parse(text, name)
         source.path = Path(path).resolve()
+        source.folder = Path(path).absolute().parent
         return source
 
     @classmethod
@@ -194,7 +197,11 @@ class TomlSource:
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
-            raise ProblemsError([_decode_problem(name, text, exc)])
+            raise ProblemsError([_decode_problem(name, text, exc)]) from None
+        except RecursionError:
+            raise ProblemsError([Problem(name, None, "", "invalid TOML: arrays or tables nested too deeply")]) from None
+        except ValueError:  # an integer of more digits than Python converts (4300)
+            raise ProblemsError([Problem(name, None, "", "invalid TOML: a number too long to read")]) from None
         return cls(name, text, data, index_positions(text))
 
     def position_of(self, loc: Sequence[str | int]) -> tuple[int, int] | None:

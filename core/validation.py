@@ -36,7 +36,7 @@ def validate(model: type[M], source: TomlSource) -> M:
 def _to_problem(model: type[BaseModel], source: TomlSource, err: Any):
     raw = tuple(err["loc"])
     is_key = "[key]" in raw  # the error is in a table's key, not its value
-    loc = _written_loc(source.data, raw[: raw.index("[key]")] if is_key else raw)
+    loc = _written_loc(source.data, raw[: raw.index("[key]")] if is_key else raw, err["type"] == "missing")
     if err["type"] == "union_tag_invalid":
         loc += (err["ctx"]["discriminator"].strip("'"),)
     message = _message(model, source.data, loc, err)
@@ -45,14 +45,15 @@ def _to_problem(model: type[BaseModel], source: TomlSource, err: Any):
     return source.problem(loc, f"invalid name: {message}" if is_key else message)
 
 
-def _written_loc(data: Any, loc: tuple) -> Loc:
-    """Drop the parts of pydantic's location that are not in the file (union tags)."""
+def _written_loc(data: Any, loc: tuple, missing: bool = False) -> Loc:
+    """Drop the parts of pydantic's location that are not in the file: union tags and the labels
+    of union members (``constrained-str``); a last part not in the file stays when ``missing``."""
     kept: list[str | int] = []
     current = data
-    for part in loc:
+    for number, part in enumerate(loc):
         if isinstance(current, dict):
-            if part not in current and part in current.values():
-                continue  # a discriminated union's tag, e.g. "liquid"
+            if part not in current and not (missing and number == len(loc) - 1):
+                continue  # a discriminated union's tag ("liquid") or a member's label
             current = current.get(part)
         elif isinstance(current, list) and isinstance(part, int) and 0 <= part < len(current):
             current = current[part]

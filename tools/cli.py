@@ -11,7 +11,8 @@ from pathlib import Path
 import click
 
 from sandmod import __version__
-from sandmod.errors import Problem, ProblemsError, display_path
+from sandmod.errors import Problem, ProblemsError, display_path, printable
+from sandmod.userfiles import Refused, check_output, inside
 
 EXIT_USER_ERROR = 2
 
@@ -129,9 +130,10 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
         if seed is not None:
             loaded.world.seed = seed
     for warning in warnings:
-        click.echo(f"warning: {warning}", err=True)
+        click.echo(printable(f"warning: {warning}"), err=True)
     settings = loaded.spec.render
     recorder, output = _recorder_and_output(loaded, world, output, format_name)
+    _check_outputs([*loaded.inputs, from_snapshot], [(output, recorder.folder is not None), (still, False), (save_snapshot, False)])
     framing = Framing(scale or settings.scale, _crop(loaded, crop))
     frames = frames or settings.frames
     compile_new_kernels(loaded.world.ruleset, announce=None if quiet else _say)
@@ -202,7 +204,10 @@ def _recorder_and_output(loaded, world: Path, output: Path | None, format_name: 
         recorder = entry.value
     if output is None:
         if settings.output:
-            output = world.parent / settings.output
+            try:
+                output = inside(loaded.source.folder, settings.output, "output")
+            except Refused as exc:
+                raise ProblemsError([loaded.source.problem(("render", "output"), str(exc))]) from None
         elif name is not None:
             output = Path(f"{world.stem}{recorder.extensions[0]}" if recorder.extensions else f"{world.stem}_frames")
         else:
@@ -213,6 +218,27 @@ def _recorder_and_output(loaded, world: Path, output: Path | None, format_name: 
             message = f"no recorder writes '{output.suffix}' files (known: {registry.recorder_choices()}); or give --format"
             raise ProblemsError([Problem(display_path(output), None, "", message)])
     return recorder, output
+
+
+def _check_outputs(inputs, outputs) -> None:
+    """Each output (a path and whether it is a folder) may be written: not a device, link or FIFO,
+    not the world file or another input of this render, and no two the same."""
+    problems, seen = [], set()
+    for path in inputs:
+        if path is not None:
+            seen.add(path.resolve())
+    for path, folder in outputs:
+        if path is None:
+            continue
+        try:
+            check_output(path, folder=folder)
+            if path.resolve() in seen:
+                raise Refused("is an input of this render or another of its outputs")
+        except Refused as exc:
+            problems.append(Problem(display_path(path), None, "", f"will not write here: {exc}"))
+        seen.add(path.resolve())
+    if problems:
+        raise ProblemsError(problems)
 
 
 def _crop(loaded, crop: tuple[int, int, int, int] | None):
@@ -291,12 +317,13 @@ def _provenance(ruleset) -> None:
     file_of = {m.name: m.source.name for m in ruleset.mods}
     for e in ruleset.elements:
         origin = e.origin
-        click.echo(f"{e.id}: defined by {origin} ({file_of[origin]}, plugin {plugin_of[origin]})")
+        click.echo(printable(f"{e.id}: defined by {origin} ({file_of[origin]}, plugin {plugin_of[origin]})"))
         for change in e.history:
-            click.echo(f"  {change.describe()}")
+            click.echo(printable(f"  {change.describe()}"))
 
 
 def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
+    rows = [tuple(printable(str(cell)) for cell in row) for row in rows]  # a mod's text cannot drive the terminal
     widths = [max(len(str(row[i])) for row in [header, *rows]) for i in range(len(header))]
     for row in [header, *rows]:
         click.echo("  ".join(str(cell).ljust(w) for cell, w in zip(row, widths)).rstrip())
@@ -337,7 +364,7 @@ def validate(paths, mod_dirs) -> None:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
     report = check(load_registry(), folders, mod_files, worlds, _mod_folders(mod_dirs))
     for warning in report.warnings:
-        click.echo(f"warning: {warning}", err=True)
+        click.echo(printable(f"warning: {warning}"), err=True)
     if problems or report.problems:
         raise ProblemsError(problems + report.problems)
     click.echo(
@@ -667,7 +694,7 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, se
     for path in worlds:  # every file checked before anything is timed
         timed, warnings = benchmark.world_bench(path, mod_dirs=_mod_folders(mod_dirs), seed=seed)
         for warning in warnings:
-            click.echo(f"warning: {warning}", err=True)
+            click.echo(printable(f"warning: {warning}"), err=True)
         benches.append(timed)
     ruleset = load_ruleset()
     if scenes or not worlds:
