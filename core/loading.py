@@ -18,6 +18,7 @@ import pluggy
 
 from .compiler import Ruleset, compile_mods
 from .errors import Problem
+from .limits import DEFAULT_MAX_MEMORY, MemoryBudget
 from .modset import ModSet, find_mods
 from .registry import Registry, collect, make_plugin_manager
 from .tomlsource import TomlSource
@@ -50,6 +51,7 @@ class LoadedWorld:
     world: World
     registry: Registry
     warnings: list[Problem] = field(default_factory=list)  # e.g. other mod versions than it was made with
+    memory: MemoryBudget = field(default_factory=MemoryBudget)  # what it was allowed, and promised so far
 
     @property
     def inputs(self) -> list[Path]:
@@ -79,9 +81,18 @@ def read_world_spec(path: str | Path) -> tuple[WorldFile, TomlSource]:
 
 
 def load_world(
-    path: str | Path, *, mod_dirs: Iterable[Path] = (), seed: int | None = None, registry: Registry | None = None
+    path: str | Path,
+    *,
+    mod_dirs: Iterable[Path] = (),
+    seed: int | None = None,
+    registry: Registry | None = None,
+    max_memory: int | None = DEFAULT_MAX_MEMORY,
 ) -> LoadedWorld:
-    """Read a world file, load the mods it asks for and paint its scene."""
+    """Read a world file, load the mods it asks for and paint its scene.
+
+    What the world would take is checked against ``max_memory`` bytes (None:
+    no limit) before it is allocated; past it, a ProblemsError says how much.
+    """
     from .scene import build_world
 
     path = Path(path)
@@ -89,8 +100,9 @@ def load_world(
     registry = registry or load_registry()
     modset: ModSet = find_mods(registry, world_mod_dirs(path, mod_dirs))
     ruleset = compile_mods(_select_for_world(modset, spec, source))
-    world = build_world(spec, ruleset, source, seed)
-    return LoadedWorld(path, spec, source, ruleset, world, registry, mod_warnings(spec, source, ruleset))
+    memory = MemoryBudget(max_memory)
+    world = build_world(spec, ruleset, source, seed, memory)
+    return LoadedWorld(path, spec, source, ruleset, world, registry, mod_warnings(spec, source, ruleset), memory)
 
 
 def mod_warnings(spec: WorldFile, source: TomlSource, ruleset: Ruleset) -> list[Problem]:

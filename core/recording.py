@@ -91,6 +91,8 @@ class RecorderSpec:
     open: Callable[[Path, VideoSettings], Recorder]
     description: str = ""
     folder: str | None = None  # for a recorder that writes a folder: a glob of its files' names, e.g. "frame_*.png"
+    max_side: int | None = None  # the widest and tallest image the format holds, in pixels
+    kept_bytes_per_pixel: float = 0.0  # memory each recorded pixel takes until the output is closed (0: streamed)
 
 
 @contextlib.contextmanager

@@ -9,6 +9,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from .limits import MemoryBudget
 from .recording import RecorderSpec, VideoSettings, atomic_folder, atomic_path, write_png
 from .world import World
 
@@ -59,6 +60,21 @@ def enlarge(frame: np.ndarray, scale: int) -> np.ndarray:
     return big.reshape(height * scale, width * scale)
 
 
+def render_problems(recorder: RecorderSpec, world: World, framing: Framing, frames: int, every: int, memory: MemoryBudget) -> list[str]:
+    """Why a render cannot be done, found before it starts: images too large for the format, or
+    more memory than ``memory`` has left for the images the format keeps until it closes."""
+    width, height = framing.size(world)
+    if recorder.max_side is not None and max(width, height) > recorder.max_side:
+        return [
+            f"{recorder.name} images are at most {recorder.max_side} pixels a side; these would be {width}x{height} "
+            "(a smaller --scale or --crop, or another format)"
+        ]
+    images = frames // every + 1
+    kept = int(images * width * height * recorder.kept_bytes_per_pixel) + 4 * width * height  # and the frame being drawn
+    over = memory.take(kept, f"{recorder.name} keeping {images} images of {width}x{height}")
+    return [] if over is None else [over + "; or fewer --frames, a larger --every, a smaller --scale, a streamed format (gif, png-frames)"]
+
+
 @dataclass(frozen=True)
 class RenderResult:
     """What a render wrote."""
@@ -66,6 +82,7 @@ class RenderResult:
     path: Path
     frames: int  # frames simulated
     images: int  # images written
+    distinct: int  # of them, those unlike the image before (a GIF stores only these)
     width: int  # image size in pixels
     height: int
     still: Path | None = None
@@ -91,7 +108,6 @@ def render(
     """
     width, height = framing.size(world)
     settings = VideoSettings(width, height, world.ruleset.palette, fps, loop)
-    images = 0
     with contextlib.ExitStack() as stack:
         place = atomic_folder(output, recorder.folder) if recorder.folder else atomic_path(output)
         tmp = stack.enter_context(place)
@@ -99,17 +115,18 @@ def render(
         out = recorder.open(tmp, settings)
         image = framing.image(world)
         out.add_frame(image)
-        images += 1
+        images = distinct = 1
         for done in range(1, frames + 1):
             world.step()
             if done % every == 0 or (done == frames and still_tmp is not None):
-                image = framing.image(world)
+                previous, image = image, framing.image(world)
             if done % every == 0:
                 out.add_frame(image)
                 images += 1
+                distinct += not np.array_equal(image, previous)
             if progress is not None:
                 progress(1)
         out.close()
         if still_tmp is not None:
             write_png(still_tmp, image, settings.palette)
-    return RenderResult(Path(output), frames, images, width, height, still)
+    return RenderResult(Path(output), frames, images, distinct, width, height, still)

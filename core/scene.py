@@ -10,8 +10,9 @@ import numpy as np
 
 from .compiler import Ruleset
 from .errors import Problem, ProblemsError
+from .limits import PICTURE_BYTES_PER_PIXEL, WORLD_BYTES_PER_CELL, MemoryBudget
 from .pictures import PictureError, fit, hex_rgb, legend_indices, read_rgba
-from .shapes import circle_mask, fill_mask, rect_mask, stroke_mask
+from .shapes import Patch, circle_mask, fill_mask, rect_mask, stroke_mask
 from .tomlsource import Loc, TomlSource
 from .userfiles import Refused, inside
 from .world import Emitter, Heater, Painting, Spray, Switches, World
@@ -54,10 +55,18 @@ class _Builder:
     ruleset: Ruleset
     source: TomlSource
     world: World
+    budget: MemoryBudget
     problems: list[Problem] = field(default_factory=list)
 
     def note(self, loc: Loc, message: str) -> None:
         self.problems.append(self.source.problem(loc, message))
+
+    def keep(self, loc: Loc, nbytes: int) -> bool:
+        """Promise the memory a part of the world keeps until its frame; False (problem noted) past the limit."""
+        over = self.budget.take(nbytes, "this")
+        if over is not None:
+            self.note(loc, over)
+        return over is None
 
     def element(self, loc: Loc, ref: str) -> int | None:
         try:
@@ -66,7 +75,7 @@ class _Builder:
             self.note(loc, exc.args[0])
             return None
 
-    def area(self, loc: Loc, shape, what: str = "the shape") -> Callable[[np.ndarray], np.ndarray] | None:
+    def area(self, loc: Loc, shape, what: str = "the shape", kept: bool = False) -> Callable[[np.ndarray], np.ndarray] | None:
         """The shape's mask function, or None (problem noted) when it covers no cell of the world now.
 
         Only a fill depends on what the world holds; other shapes' masks are made once.
@@ -77,24 +86,27 @@ class _Builder:
             return None
         if isinstance(shape, FillArea):
             return lambda cells: shape_mask(shape, cells)
-        return lambda cells: mask
+        patch = Patch.of(mask)
+        if kept and not self.keep(loc, patch.box.nbytes):
+            return None
+        return lambda cells: patch.whole()
 
-    def layer(self, loc: Loc, shape) -> Layer | None:
+    def layer(self, loc: Loc, shape, kept: bool = False) -> Layer | None:
         """What painting a shape (or a picture) does, or None (problem noted)."""
         if isinstance(shape, Picture):
-            return self.picture(loc, shape)
+            return self.picture(loc, shape, kept)
         element = self.element(loc + ("element",), shape.element)
-        area = self.area(loc, shape)
+        area = self.area(loc, shape, kept=kept)
         if element is None or area is None:
             return None
-        return lambda cells: np.where(area(cells), element, -1)
+        return lambda cells: np.where(area(cells), np.int32(element), np.int32(-1))
 
     def erasure(self, loc: Loc, shape) -> Layer | None:
         """What erasing a shape does: its cells become empty (element 0)."""
-        area = self.area(loc, shape)
-        return None if area is None else lambda cells: np.where(area(cells), 0, -1)
+        area = self.area(loc, shape, kept=True)
+        return None if area is None else lambda cells: np.where(area(cells), np.int32(0), np.int32(-1))
 
-    def picture(self, loc: Loc, picture: Picture) -> Layer | None:
+    def picture(self, loc: Loc, picture: Picture, kept: bool = False) -> Layer | None:
         elements = [self.element(loc + ("legend", colour), ref) for colour, ref in picture.legend.items()]
         world = self.world
         box_width = picture.width or world.width - picture.x
@@ -104,7 +116,8 @@ class _Builder:
             return None
         folder = self.source.folder or Path(".")
         try:
-            rgba = read_rgba(inside(folder, picture.file, "picture"))
+            left = self.budget.left()
+            rgba = read_rgba(inside(folder, picture.file, "picture"), None if left is None else left // PICTURE_BYTES_PER_PIXEL)
             colours = [hex_rgb(c) for c in picture.legend]
             indices = legend_indices(rgba, colours, nearest=picture.match == "nearest")
         except (PictureError, Refused) as exc:
@@ -112,13 +125,16 @@ class _Builder:
             return None
         if None in elements:
             return None
-        lookup = np.array(elements + [-1], np.int64)  # index -1 (transparent) reads the last entry
+        lookup = np.array(elements + [-1], np.int32)  # index -1 (transparent) reads the last entry
         painted = lookup[fit(indices, box_width, box_height)]
-        layer = np.full(world.cells.shape, -1, np.int64)
+        layer = np.full(world.cells.shape, -1, np.int32)
         x0, y0 = max(picture.x, 0), max(picture.y, 0)
         x1, y1 = min(picture.x + box_width, world.width), min(picture.y + box_height, world.height)
         layer[y0:y1, x0:x1] = painted[y0 - picture.y : y1 - picture.y, x0 - picture.x : x1 - picture.x]
-        return lambda cells: layer
+        patch = Patch.of(layer, -1)
+        if kept and not self.keep(loc, patch.box.nbytes):
+            return None
+        return lambda cells: patch.whole()
 
     def switches(self, name: str | None) -> Switches:
         """The timeline's start and stop events for the emitter or spray called ``name``."""
@@ -143,15 +159,22 @@ class _Builder:
         return Spray(ys, xs, element, burst.direction, burst.spread, speeds, rate, start, stop, number, switches)
 
 
-def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int | None = None) -> World:
+def build_world(
+    spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int | None = None, budget: MemoryBudget | None = None
+) -> World:
     """Paint ``spec``'s scene into a new world and set up what runs over frames.
 
     ProblemsError names unknown elements, shapes outside the world, unreadable
-    pictures and timeline events that name no emitter or spray.
+    pictures, timeline events that name no emitter or spray, and whatever
+    would pass the memory ``budget`` (by default, the default limit).
     """
     info = spec.world
+    budget = budget or MemoryBudget()
+    over = budget.take(info.width * info.height * WORLD_BYTES_PER_CELL, f"a {info.width}x{info.height} world")
+    if over is not None:
+        raise ProblemsError([source.problem(("world",), over)])
     world = World(ruleset, info.width, info.height, info.seed if seed is None else seed, info.gravity)
-    build = _Builder(spec, ruleset, source, world)
+    build = _Builder(spec, ruleset, source, world, budget)
     for number, shape in enumerate(spec.scene):  # in order: a fill sees what came before
         layer = build.layer(("scene", number), shape)
         if layer is not None:
@@ -164,6 +187,8 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
         area = build.area(("emitters", number), emitter)
         if element is not None and area is not None:
             ys, xs = np.nonzero(area(world.cells))
+            if not build.keep(("emitters", number), ys.nbytes + xs.nbytes):
+                continue
             world.emitters.append(
                 Emitter(ys, xs, element, emitter.start, emitter.stop, emitter.chance, build.switches(emitter.name))
             )
@@ -175,7 +200,7 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
     for number, event in enumerate(spec.timeline):
         loc = ("timeline", number, event.action)
         if event.paint is not None:
-            layer = build.layer(loc, event.paint)
+            layer = build.layer(loc, event.paint, kept=True)
             if layer is not None:
                 world.paintings.append(Painting(event.frame, layer, getattr(event.paint, "temperature", None), number))
         elif event.erase is not None:
@@ -183,7 +208,7 @@ def build_world(spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int
             if layer is not None:
                 world.paintings.append(Painting(event.frame, layer, None, number))
         elif event.heat is not None:
-            area = build.area(loc, event.heat)
+            area = build.area(loc, event.heat, kept=True)
             if area is not None:
                 world.heaters.append(Heater(area, event.heat.temperature, event.frame, event.frame + event.heat.frames))
         elif event.spawn is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections import deque
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -18,8 +19,14 @@ def rect_mask(width: int, height: int, x: int, y: int, w: int, h: int) -> np.nda
 
 def circle_mask(width: int, height: int, cx: int, cy: int, radius: float) -> np.ndarray:
     """Cells whose centres lie within ``radius`` of (cx, cy)."""
-    ys, xs = np.ogrid[:height, :width]
-    return (xs - cx) ** 2 + (ys - cy) ** 2 <= radius * radius
+    mask = np.zeros((height, width), bool)
+    reach = int(np.ceil(radius))
+    x0, x1 = max(cx - reach, 0), min(cx + reach + 1, width)
+    y0, y1 = max(cy - reach, 0), min(cy + reach + 1, height)
+    if x0 < x1 and y0 < y1:  # only the box around the disc is computed
+        ys, xs = np.ogrid[y0:y1, x0:x1]
+        mask[y0:y1, x0:x1] = (xs - cx) ** 2 + (ys - cy) ** 2 <= radius * radius
+    return mask
 
 
 def brush_offsets(diameter: int) -> list[tuple[int, int]]:
@@ -44,12 +51,16 @@ def stroke_mask(width: int, height: int, points, thickness: int) -> np.ndarray:
     """A brush of diameter ``thickness`` dragged along the line traversal from each point to the next."""
     mask = np.zeros((height, width), bool)
     offsets = brush_offsets(thickness)
+    reach = thickness // 2 + 1
     for (x0, y0), (x1, y1) in zip(points, points[1:]):
-        for x, y in line_cells(x0, y0, x1, y1):
-            for ox, oy in offsets:
-                px, py = x + ox, y + oy
-                if 0 <= px < width and 0 <= py < height:
-                    mask[py, px] = True
+        cells = line_cells(x0, y0, x1, y1)
+        xs, ys = cells[:, 0], cells[:, 1]
+        near = (xs >= -reach) & (xs < width + reach) & (ys >= -reach) & (ys < height + reach)
+        xs, ys = xs[near], ys[near]  # only cells whose brush can reach the world
+        for ox, oy in offsets:
+            px, py = xs + ox, ys + oy
+            inside = (px >= 0) & (px < width) & (py >= 0) & (py < height)
+            mask[py[inside], px[inside]] = True
     return mask
 
 
@@ -67,3 +78,33 @@ def fill_mask(cells: np.ndarray, x: int, y: int) -> np.ndarray:
                 mask[ny, nx] = True
                 queue.append((nx, ny))
     return mask
+
+
+@dataclass(frozen=True)
+class Patch:
+    """A world-sized array kept as its smallest box that holds everything but ``blank``: what a
+    timeline shape or picture covers, stored small until its frame comes."""
+
+    height: int
+    width: int
+    top: int
+    left: int
+    box: np.ndarray
+    blank: object
+
+    @classmethod
+    def of(cls, whole: np.ndarray, blank=False) -> "Patch":
+        """The patch of ``whole`` (a (height, width) array), cut to its cells other than ``blank``."""
+        rows = np.flatnonzero((whole != blank).any(axis=1))
+        columns = np.flatnonzero((whole != blank).any(axis=0))
+        if rows.size == 0:
+            return cls(*whole.shape, 0, 0, whole[:0, :0].copy(), blank)
+        top, left = int(rows[0]), int(columns[0])
+        box = whole[top : rows[-1] + 1, left : columns[-1] + 1].copy()
+        return cls(*whole.shape, top, left, box, blank)
+
+    def whole(self) -> np.ndarray:
+        """The world-sized array again."""
+        out = np.full((self.height, self.width), self.blank, self.box.dtype)
+        out[self.top : self.top + self.box.shape[0], self.left : self.left + self.box.shape[1]] = self.box
+        return out

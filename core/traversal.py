@@ -31,4 +31,5 @@ def line_cells(x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
     steps = max(abs(dx), abs(dy))
     if steps == 0:
         return np.array([(x0, y0)], np.int64)
-    return np.array([line_point(x0, y0, dx, dy, steps, i) for i in range(steps + 1)], np.int64)
+    xs, ys = line_point(x0, y0, dx, dy, steps, np.arange(steps + 1, dtype=np.int64))  # all the cells at once
+    return np.stack([np.broadcast_to(xs, steps + 1), np.broadcast_to(ys, steps + 1)], axis=1).astype(np.int64)

@@ -176,6 +176,9 @@ class Heater:
         return self.start <= frame < self.stop
 
 
+#: Cells painted at once from a mask (the rest band by band), so painting a whole world takes little memory.
+PAINT_BAND = 1 << 18
+
 _AT_REST = np.zeros(0, np.int64)  # no velocities: what World._pour paints is at rest
 
 
@@ -233,7 +236,7 @@ class World:
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
         self.paintings: list[Painting] = []
         self.heaters: list[Heater] = []
-        self.paint(np.ones((height, width), bool), 0)  # empty, with its own shades
+        self.paint(np.broadcast_to(True, shape), 0)  # empty, with its own shades
 
     @property
     def cells(self) -> np.ndarray:
@@ -242,8 +245,12 @@ class World:
 
     def paint(self, mask: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT) -> int:
         """Set the cells of ``mask`` to ``element`` as newly born cells; returns how many changed."""
-        ys, xs = np.nonzero(mask)
-        return self.paint_cells(ys, xs, element, chance=chance, only_empty=only_empty, salt=salt)
+        rows = max(1, PAINT_BAND // self.width)  # a band of rows at a time: the temporaries stay small
+        painted = 0
+        for top in range(0, self.height, rows):
+            ys, xs = np.nonzero(mask[top : top + rows])
+            painted += self.paint_cells(ys + top, xs, element, chance=chance, only_empty=only_empty, salt=salt)
+        return painted
 
     def paint_layer(self, layer: np.ndarray, *, salt: int = SALT_PAINT) -> np.ndarray:
         """Paint each cell with the element ``layer`` gives (-1: left alone); returns the painted mask."""

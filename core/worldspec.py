@@ -70,8 +70,17 @@ from .modspec import ELEMENT_REF, MAX_SPEED, Explosion, HexColor, ModName, Tempe
 #: Largest width or height (the kernel's cell hash packs x and y in 16 and 15 bits).
 MAX_SIZE = 16384
 
+#: Most entries in each of a world's lists (scene, emitters, sprays, explosions, timeline).
+MAX_ITEMS = 10000
+#: Coordinates lie within this distance of the world's corner (shapes may reach past its edges).
+MAX_COORD = 2 * MAX_SIZE
+#: A stroke's segments together span at most this many cells (along their longer axes).
+MAX_STROKE_CELLS = 16 * MAX_SIZE
+
 ElementRef = Annotated[str, Field(pattern=rf"^{ELEMENT_REF}$", description="An element, e.g. 'sand' or 'base:stone'.")]
-Point = Annotated[list[int], Field(min_length=2, max_length=2, description="A cell as [x, y].")]
+Coord = Annotated[int, Field(ge=-MAX_COORD, le=MAX_COORD)]
+Point = Annotated[list[Coord], Field(min_length=2, max_length=2, description="A cell as [x, y].")]
+Extent = Annotated[int, Field(ge=1, le=MAX_COORD)]
 
 
 class _Strict(BaseModel):
@@ -107,18 +116,18 @@ class RectArea(_Strict):
     """An axis-aligned rectangle."""
 
     shape: Literal["rect"]
-    x: int = Field(description="Left column.")
-    y: int = Field(description="Top row.")
-    width: int = Field(ge=1, description="Width in cells.")
-    height: int = Field(ge=1, description="Height in cells.")
+    x: Coord = Field(description="Left column.")
+    y: Coord = Field(description="Top row.")
+    width: Extent = Field(description="Width in cells.")
+    height: Extent = Field(description="Height in cells.")
 
 
 class CircleArea(_Strict):
     """A filled disc."""
 
     shape: Literal["circle"]
-    x: int = Field(description="Centre column.")
-    y: int = Field(description="Centre row.")
+    x: Coord = Field(description="Centre column.")
+    y: Coord = Field(description="Centre row.")
     radius: float = Field(gt=0, le=MAX_SIZE, description="Radius in cells.")
 
 
@@ -137,6 +146,14 @@ class StrokeArea(_Strict):
     shape: Literal["stroke"]
     points: list[Point] = Field(min_length=2, max_length=4096, description="The corners, [[x, y], ...], in order.")
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
+
+    @field_validator("points")
+    @classmethod
+    def _not_too_long(cls, points: list[list[int]]) -> list[list[int]]:
+        cells = sum(max(abs(b[0] - a[0]), abs(b[1] - a[1])) for a, b in zip(points, points[1:]))
+        if cells > MAX_STROKE_CELLS:
+            raise ValueError(f"its segments span {cells} cells; at most {MAX_STROKE_CELLS}")
+        return points
 
 
 class FillArea(_Strict):
@@ -186,13 +203,14 @@ class Picture(_Strict):
     shape: Literal["image"]
     file: str = Field(min_length=1, description="The image, relative to the world file.")
     legend: dict[HexColor, ElementRef] = Field(
-        min_length=1, description="Which element each colour paints: {'#rrggbb' = 'element'}; 'empty' clears."
+        min_length=1,
+        max_length=256, description="Which element each colour paints: {'#rrggbb' = 'element'}; 'empty' clears."
     )
     match: Literal["exact", "nearest"] = Field(
         "exact", description="'exact': every colour must be in the legend; 'nearest': the closest legend colour."
     )
-    x: int = Field(0, description="Left column of the box the picture covers.")
-    y: int = Field(0, description="Top row of the box.")
+    x: Coord = Field(0, description="Left column of the box the picture covers.")
+    y: Coord = Field(0, description="Top row of the box.")
     width: int | None = Field(None, ge=1, le=MAX_SIZE, description="Width of the box in cells (default: to the right edge).")
     height: int | None = Field(None, ge=1, le=MAX_SIZE, description="Height of the box in cells (default: to the bottom).")
 
@@ -202,8 +220,8 @@ Shape = Annotated[Union[Rect, Circle, Line, Stroke, Fill, Picture], Field(discri
 
 class _Timed(_Strict):
     name: str | None = Field(None, pattern=r"^[A-Za-z0-9_-]+$", description="A name the timeline can start and stop it by.")
-    start: int = Field(0, ge=0, description="First frame it is on.")
-    stop: int | None = Field(None, ge=1, description="It stops before this frame (never, if left out).")
+    start: int = Field(0, ge=0, le=1_000_000, description="First frame it is on.")
+    stop: int | None = Field(None, ge=1, le=1_000_001, description="It stops before this frame (never, if left out).")
 
     @model_validator(mode="after")
     def _stop_after_start(self):
@@ -291,7 +309,7 @@ class Blast(Explosion):
 class ScheduledExplosion(Blast):
     """An explosion the world sets off at a frame and place (after that frame's step)."""
 
-    frame: int = Field(ge=0, description="The frame it goes off on.")
+    frame: int = Field(ge=0, le=1_000_000, description="The frame it goes off on.")
 
 
 def _no_element(value: object) -> object:
@@ -368,7 +386,7 @@ class RenderSettings(_Strict):
     scale: int = Field(3, ge=1, le=16, description="Pixels per cell (nearest neighbour).")
     fps: float = Field(25, gt=0, le=50, description="Images per second when played back (GIF: delays of at least 20 ms).")
     loop: int = Field(0, ge=0, le=65535, description="Times the animation plays in all; 0 = forever.")
-    crop: list[int] | None = Field(
+    crop: list[Coord] | None = Field(
         None, min_length=4, max_length=4, description="Record only this region of cells: [x, y, width, height]."
     )
     format: str | None = Field(
@@ -383,9 +401,11 @@ class WorldFile(_Strict):
     """A whole world file."""
 
     world: WorldInfo = Field(description="Size, seed and mods.")
-    scene: list[Shape] = Field(default_factory=list, description="Shapes painted in order before the first frame.")
-    emitters: list[Emitter] = Field(default_factory=list, description="Shapes that pour an element over frames.")
-    sprays: list[Spray] = Field(default_factory=list, description="Sources of flying particles.")
-    explosions: list[ScheduledExplosion] = Field(default_factory=list, description="Blasts at given frames and places.")
-    timeline: list[Event] = Field(default_factory=list, description="Events at given frames: paint, erase, heat, start, stop, spawn, explode.")
+    scene: list[Shape] = Field(default_factory=list, max_length=MAX_ITEMS, description="Shapes painted in order before the first frame.")
+    emitters: list[Emitter] = Field(default_factory=list, max_length=MAX_ITEMS, description="Shapes that pour an element over frames.")
+    sprays: list[Spray] = Field(default_factory=list, max_length=MAX_ITEMS, description="Sources of flying particles.")
+    explosions: list[ScheduledExplosion] = Field(default_factory=list, max_length=MAX_ITEMS, description="Blasts at given frames and places.")
+    timeline: list[Event] = Field(
+        default_factory=list, max_length=MAX_ITEMS, description="Events at given frames: paint, erase, heat, start, stop, spawn, explode."
+    )
     render: RenderSettings = Field(default_factory=RenderSettings, description="How 'sandmod render' records.")

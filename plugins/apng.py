@@ -24,4 +24,8 @@ class ApngRecorder(SavedAtClose):
 
 @hookimpl
 def register_recorders(register):
-    register(RecorderSpec("apng", (".apng", ".png"), ApngRecorder, "Animated PNG: lossless, the shared palette, any delay."))
+    register(
+        RecorderSpec(
+            "apng", (".apng", ".png"), ApngRecorder, "Animated PNG: lossless, the shared palette, any delay.", kept_bytes_per_pixel=2
+        )
+    )

@@ -43,4 +43,8 @@ class WebpRecorder(SavedAtClose):
 
 @hookimpl
 def register_recorders(register):
-    register(RecorderSpec("webp", (".webp",), WebpRecorder, "Animated WebP: lossless, small, any delay."))
+    register(
+        RecorderSpec(
+            "webp", (".webp",), WebpRecorder, "Animated WebP: lossless, small, any delay.", max_side=16383, kept_bytes_per_pixel=3
+        )
+    )

@@ -70,6 +70,28 @@ class ThreadCount(click.ParamType):
         return number
 
 
+class MemorySize(click.ParamType):
+    """A number of bytes like 4G or 512M, or none (None: no limit)."""
+
+    name = "SIZE"
+
+    def convert(self, value, param, ctx):
+        if value is None or isinstance(value, int) or str(value).lower() == "none":
+            return None if value is None or str(value).lower() == "none" else value
+        from sandmod.limits import parse_size
+
+        try:
+            return parse_size(str(value))
+        except ValueError as exc:
+            self.fail(str(exc), param, ctx)
+
+
+def _images(result) -> str:
+    """'41 images', or '41 images (2 distinct)' when most were like the one before."""
+    text = _counted(result.images, "image")
+    return text if result.distinct == result.images else f"{text} ({result.distinct} distinct)"
+
+
 def _named(count: int | None) -> int | str:
     """A thread count as results show it: the number, or auto."""
     from sandmod.benchmark import AUTO
@@ -101,9 +123,11 @@ _mods_option = click.option(
 @click.option("--save-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Save the final state to an .npz file.")
 @click.option("--from-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Start from a saved state (and its frame and seed).")
 @click.option("--threads", type=ThreadCount(), help="Threads to step the world on, or auto (the default: as many as pay, see below); the frames are the same on any number.")
+@click.option("--max-memory", type=MemorySize(), default="4G", show_default=True,
+              help="Refuse, before it starts, a render that would take more memory than this (e.g. 16G; none: no limit).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 @_mods_option
-def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, threads, quiet, mod_dirs) -> None:
+def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, threads, max_memory, quiet, mod_dirs) -> None:
     """Simulate WORLD (a world .toml file) and write an animation.
 
     \b
@@ -116,11 +140,11 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
         _thread_pool(threads)
     from sandmod.loading import load_world
     from sandmod.recording import output_bytes
-    from sandmod.render import Framing
+    from sandmod.render import Framing, render_problems
     from sandmod.render import render as run
     from sandmod.warmup import compile_new_kernels, compile_parallel
 
-    loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed)
+    loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed, max_memory=max_memory)
     loaded.world.threads = threads
     warnings = [str(w) for w in loaded.warnings]
     if from_snapshot is not None:
@@ -135,13 +159,16 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     recorder, output = _recorder_and_output(loaded, world, output, format_name)
     _check_outputs([*loaded.inputs, from_snapshot], [(output, recorder.folder is not None), (still, False), (save_snapshot, False)])
     framing = Framing(scale or settings.scale, _crop(loaded, crop))
-    frames = frames or settings.frames
+    frames, every = frames or settings.frames, every or settings.every
+    refused = render_problems(recorder, loaded.world, framing, frames, every, loaded.memory)
+    if refused:
+        raise ProblemsError([Problem(display_path(output), None, "", message) for message in refused])
     compile_new_kernels(loaded.world.ruleset, announce=None if quiet else _say)
     compile_parallel(loaded.world, announce=None if quiet else _say)
     started = time.perf_counter()
     options = dict(
         frames=frames,
-        every=every or settings.every,
+        every=every,
         framing=framing,
         fps=fps or settings.fps,
         loop=settings.loop if loop is None else loop,
@@ -161,7 +188,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     if not quiet:
         extras = "".join(f", {what} {display_path(path)}" for what, path in (("still", still), ("snapshot", save_snapshot)) if path)
         click.echo(
-            f"wrote {display_path(output)}: {_counted(result.images, 'image')} of {result.width}x{result.height} "
+            f"wrote {display_path(output)}: {_images(result)} of {result.width}x{result.height} "
             f"from {_counted(result.frames, 'frame')} in {time.perf_counter() - started:.1f} s ({output_bytes(output) / 1e6:.2f} MB){extras}"
         )
 
