@@ -11,16 +11,22 @@ from __future__ import annotations
 
 import json
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .errors import Problem, ProblemsError, display_path
+from .userfiles import NO_SUCH_FILE, Refused, open_regular
+from .worldspec import MAX_SIZE
 from .recording import atomic_path
 from .world import State, World
 
 #: Bumped when the layout changes; older files are refused with a clear message.
 FORMAT = 1
+#: Bytes of an .npy member besides its data (its header).
+_NPY_HEADER = 4096
 #: State arrays that hold element numbers, remapped by id on load.
 ELEMENT_ARRAYS = ("cells", "carry")
 
@@ -55,30 +61,29 @@ def load_snapshot(world: World, path: Path) -> list[str]:
     def fail(message: str) -> ProblemsError:
         return ProblemsError([Problem(name, None, "", message)])
 
+    expected = {n: getattr(world.state, n) for n in State._fields}
+    expected["awake"] = world.awake
     try:
-        with np.load(path, allow_pickle=False) as data:
-            meta = json.loads(str(data["meta"]))
-            arrays = {key: data[key] for key in data.files if key != "meta"}
-    except FileNotFoundError:
-        raise fail("no such snapshot file") from None
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile):  # ValueError covers bad JSON
-        raise fail("not a sandmod snapshot (write one with 'sandmod render --save-snapshot FILE.npz')") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise fail(f"snapshot format {meta.get('format') if isinstance(meta, dict) else '?'}; this sandmod reads format {FORMAT}")
-    missing = [key for key in ("frame", "seed", "width", "height", "elements") if key not in meta]
-    if missing:
-        raise fail(f"its description lacks {', '.join(missing)}")
-    size = (meta["height"], meta["width"])
+        meta, arrays = _read(path, expected)
+    except Refused as exc:
+        raise fail("no such snapshot file" if str(exc) == NO_SUCH_FILE else f"cannot read snapshot: {exc}") from None
+    except _NotASnapshot as exc:
+        why = f": {exc}" if str(exc) else " (write one with 'sandmod render --save-snapshot FILE.npz')"
+        raise fail(f"not a sandmod snapshot{why}") from None
+    if meta.format != FORMAT:
+        raise fail(f"snapshot format {meta.format}; this sandmod reads format {FORMAT}")
+    size = (meta.height, meta.width)
     if size != (world.height, world.width):
         raise fail(f"made for a {size[1]}x{size[0]} world; this world is {world.width}x{world.height}")
-    expected = {n: getattr(world.state, n) for n in State._fields}
     for key, like in expected.items():
         got = arrays.get(key)
         # Element numbers are remapped below, so any unsigned width will do (older files' carry was uint16).
         same_kind = got is not None and (got.dtype == like.dtype or (key in ELEMENT_ARRAYS and got.dtype.kind == "u"))
+        if key == "awake" and got is None:
+            continue  # older files: every chunk wakes
         if not same_kind or got.shape != like.shape:
             raise fail(f"its '{key}' array is missing or not {like.dtype} of {like.shape[1]}x{like.shape[0]}")
-    ids: list[str] = meta["elements"]
+    ids: list[str] = meta.elements
     used = np.zeros(len(ids), bool)
     for key in ELEMENT_ARRAYS:
         if int(arrays[key].max(initial=0)) >= len(ids):
@@ -93,22 +98,82 @@ def load_snapshot(world: World, path: Path) -> list[str]:
             if used[number]:
                 unknown.append(element_id)
     if unknown:
-        raise fail(f"holds {', '.join(unknown)}, which no loaded mod defines")
+        more = f" and {len(unknown) - 5} more" if len(unknown) > 5 else ""
+        raise fail(f"holds {', '.join(unknown[:5])}{more}, which no loaded mod defines")
     state = world.state
     for key in State._fields:
         getattr(state, key)[...] = remap[arrays[key]] if key in ELEMENT_ARRAYS else arrays[key]
     _keep_temperatures(state, arrays.get("heat_cap"), world.tables.heat_cap, remap, used)
-    world.frame, world.seed = int(meta["frame"]), int(meta["seed"])
+    world.frame, world.seed = meta.frame, meta.seed
     world.wake()  # every chunk's marks start afresh: awake, and heat not known to be even
-    awake = arrays.get("awake")
-    if awake is not None and awake.shape == world.awake.shape:
-        world.awake[...] = awake  # the snapshot's own, so the run goes on as it would have
-    return _mod_warnings(meta.get("mods", {}), world)
+    if "awake" in arrays:
+        world.awake[...] = arrays["awake"]  # the snapshot's own, so the run goes on as it would have
+    return _mod_warnings(meta.mods, world)
+
+
+class _Meta(BaseModel):
+    """A snapshot's description, as it must be."""
+
+    model_config = ConfigDict(strict=True)
+    format: int
+    frame: int = Field(ge=0, le=2**40)
+    seed: int = Field(ge=0, le=2**32 - 1)
+    width: int = Field(ge=1, le=MAX_SIZE)
+    height: int = Field(ge=1, le=MAX_SIZE)
+    elements: list[str] = Field(max_length=65536)
+    mods: dict[str, str] = Field(default_factory=dict, max_length=4096)
+
+
+class _NotASnapshot(Exception):
+    """The file is not a snapshot this sandmod wrote; the message says what is wrong."""
+
+
+def _read(path: Path, expected: dict[str, np.ndarray]) -> tuple[_Meta, dict[str, np.ndarray]]:
+    """The snapshot's description and the arrays named in ``expected`` (and ``heat_cap``), each
+    member's size checked before it is decompressed; Refused or _NotASnapshot when it cannot be."""
+    with open_regular(path) as file:
+        try:
+            data = np.load(file, allow_pickle=False)
+            if not isinstance(data, np.lib.npyio.NpzFile):  # a lone .npy array
+                raise _NotASnapshot()
+            with data:
+                sizes = {info.filename.removesuffix(".npy"): info.file_size for info in data.zip.infolist()}
+                limits = {key: like.size * (8 if key in ELEMENT_ARRAYS else like.itemsize) for key, like in expected.items()}
+                limits.update(meta=2**24, heat_cap=8 * 65536)
+                arrays = {}
+                for key, limit in limits.items():
+                    if key not in sizes:
+                        continue
+                    if sizes[key] > limit + _NPY_HEADER:
+                        raise _NotASnapshot(f"its '{key}' member is larger than a {key} can be")
+                    arrays[key] = data[key]
+                    if not isinstance(arrays[key], np.ndarray):  # a member that is not an .npy array
+                        raise _NotASnapshot()
+        except _NotASnapshot:
+            raise
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error, NotImplementedError) as exc:
+            raise _NotASnapshot() from None
+    try:
+        meta = _Meta.model_validate(json.loads(str(arrays.pop("meta"))))
+    except KeyError:
+        raise _NotASnapshot() from None
+    except (ValueError, ValidationError) as exc:  # ValueError: bad JSON
+        raise _NotASnapshot(f"its description is wrong: {_first_error(exc)}") from None
+    if meta.format == FORMAT and len(meta.elements) < 1:
+        raise _NotASnapshot("its description lists no elements")
+    return meta, arrays
+
+
+def _first_error(exc: Exception) -> str:
+    if isinstance(exc, ValidationError):
+        err = exc.errors()[0]
+        return f"{'.'.join(str(p) for p in err['loc'])}: {err['msg']}"
+    return "not JSON"
 
 
 def _keep_temperatures(state: State, old_caps, new_caps: np.ndarray, remap: np.ndarray, used: np.ndarray) -> None:
     """Rescale the heat of elements whose heat capacity a mod changed since, so their temperature stays."""
-    if old_caps is None or len(old_caps) != len(remap):
+    if old_caps is None or old_caps.shape != remap.shape or old_caps.dtype.kind not in "iu" or (old_caps < 0).any():
         return
     for number in np.flatnonzero(used):
         old, new = int(old_caps[number]), int(new_caps[remap[number]])
