@@ -95,18 +95,44 @@ class RecorderSpec:
     kept_bytes_per_pixel: float = 0.0  # memory each recorded pixel takes until the output is closed (0: streamed)
 
 
+class WriteError(OSError):
+    """Writing one of a render's outputs failed; ``target`` is the output it was for."""
+
+    def __init__(self, target: Path, cause: OSError):
+        super().__init__(cause.errno, cause.strerror or str(cause))
+        self.target = Path(target)
+
+
+@contextlib.contextmanager
+def writing(target: Path) -> Iterator[None]:
+    """Turn an OSError inside into a :class:`WriteError` naming ``target``."""
+    try:
+        yield
+    except WriteError:
+        raise
+    except OSError as exc:
+        raise WriteError(target, exc) from exc
+
+
 @contextlib.contextmanager
 def atomic_path(target: Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``target``; on success it replaces ``target``."""
+    """Yield a temporary path beside ``target``; on success it replaces ``target``.
+
+    The temporary's name holds this process's id, so that what a killed run
+    left (``.NAME.PID.*.part``) is removed by the next run on the same output.
+    """
     target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    os.close(fd)
+    with writing(target):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale(target)
+        fd, name = tempfile.mkstemp(prefix=_temp_prefix(target), suffix=".part", dir=target.parent)
+        os.close(fd)
     tmp = Path(name)
     try:
         yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())  # as an ordinary new file (mkstemp makes it private)
-        os.replace(tmp, target)
+        with writing(target):
+            os.chmod(tmp, 0o666 & ~_umask())  # as an ordinary new file (mkstemp makes it private)
+            os.replace(tmp, target)
     finally:
         tmp.unlink(missing_ok=True)
 
@@ -116,28 +142,68 @@ def atomic_folder(target: Path, files: str) -> Iterator[Path]:
     """Yield a temporary folder beside ``target``; on success it takes ``target``'s place.
 
     An existing ``target`` is replaced only when every file in it matches the
-    glob ``files`` (an earlier render's frames); otherwise FileExistsError,
-    before anything is written.
+    glob ``files`` (an earlier render's frames), checked before anything is
+    written and again just before it is replaced; otherwise FileExistsError.
     """
     target = Path(target)
-    if target.exists():
-        if not target.is_dir() or not all(p.is_file() and fnmatch.fnmatchcase(p.name, files) for p in target.iterdir()):
-            raise FileExistsError(f"{target} exists and holds other files than an earlier render's {files}")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent))
+    _only_frames(target, files)
+    with writing(target):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale(target)
+        tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(target), suffix=".part", dir=target.parent))
     try:
         yield tmp
-        os.chmod(tmp, 0o777 & ~_umask())
-        if target.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=target.parent))
-            os.replace(target, old / "frames")
-            os.replace(tmp, target)
-            shutil.rmtree(old)
-        else:
-            os.replace(tmp, target)
+        _only_frames(target, files)  # nothing else was put there while we ran
+        with writing(target):
+            os.chmod(tmp, 0o777 & ~_umask())
+            if target.exists():
+                old = Path(tempfile.mkdtemp(prefix=_temp_prefix(target), suffix=".old", dir=target.parent))
+                os.replace(target, old / "frames")
+                os.replace(tmp, target)
+                shutil.rmtree(old)
+            else:
+                os.replace(tmp, target)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp)
+
+
+def _only_frames(target: Path, files: str) -> None:
+    if target.exists():
+        if not target.is_dir() or not all(p.is_file() and fnmatch.fnmatchcase(p.name, files) for p in target.iterdir()):
+            raise FileExistsError(f"{target} exists and holds other files than an earlier render's {files}")
+
+
+def _temp_prefix(target: Path) -> str:
+    return f".{target.name}.{os.getpid()}."
+
+
+def remove_stale(target: Path) -> None:
+    """Remove what killed runs left beside ``target``: temporaries whose process is gone."""
+    prefix = f".{target.name}."
+    for path in Path(target.parent).iterdir():
+        name = path.name
+        if not (name.startswith(prefix) and name.endswith((".part", ".old"))):
+            continue
+        pid = name[len(prefix) :].split(".", 1)[0]
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError):
+        return True  # someone else's: leave it
+    return True
 
 
 def output_bytes(path: Path) -> int:

@@ -5,12 +5,12 @@ from __future__ import annotations
 import contextlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 
 from .limits import MemoryBudget
-from .recording import RecorderSpec, VideoSettings, atomic_folder, atomic_path, write_png
+from .recording import RecorderSpec, VideoSettings, atomic_folder, atomic_path, write_png, writing
 from .world import World
 
 
@@ -99,12 +99,15 @@ def render(
     fps: float = 25,
     loop: int = 0,
     still: Path | None = None,
+    also: Sequence[tuple[Path, Callable[[World, Path], None]]] = (),
     progress: Callable[[int], None] | None = None,
 ) -> RenderResult:
     """Simulate ``frames`` frames and record an image every ``every`` frames (and the first).
 
-    Everything is written atomically: on any failure neither ``output`` nor
-    ``still`` (a PNG of the last frame) is touched.
+    ``still`` is a PNG of the last frame; ``also`` pairs more outputs with what
+    writes them from the final world (a snapshot). Everything is written
+    atomically and together: on any failure or interruption none of the
+    outputs is touched. A failure to write one raises WriteError naming it.
     """
     width, height = framing.size(world)
     settings = VideoSettings(width, height, world.ruleset.palette, fps, loop)
@@ -112,21 +115,27 @@ def render(
         place = atomic_folder(output, recorder.folder) if recorder.folder else atomic_path(output)
         tmp = stack.enter_context(place)
         still_tmp = stack.enter_context(atomic_path(still)) if still is not None else None
-        out = recorder.open(tmp, settings)
-        image = framing.image(world)
-        out.add_frame(image)
-        images = distinct = 1
-        for done in range(1, frames + 1):
-            world.step()
-            if done % every == 0 or (done == frames and still_tmp is not None):
-                previous, image = image, framing.image(world)
-            if done % every == 0:
-                out.add_frame(image)
-                images += 1
-                distinct += not np.array_equal(image, previous)
-            if progress is not None:
-                progress(1)
-        out.close()
+        extra_tmps = [stack.enter_context(atomic_path(path)) for path, _ in also]
+        with writing(output):
+            out = recorder.open(tmp, settings)
+            image = framing.image(world)
+            out.add_frame(image)
+            images = distinct = 1
+            for done in range(1, frames + 1):
+                world.step()
+                if done % every == 0 or (done == frames and still_tmp is not None):
+                    previous, image = image, framing.image(world)
+                if done % every == 0:
+                    out.add_frame(image)
+                    images += 1
+                    distinct += not np.array_equal(image, previous)
+                if progress is not None:
+                    progress(1)
+            out.close()
         if still_tmp is not None:
-            write_png(still_tmp, image, settings.palette)
+            with writing(still):
+                write_png(still_tmp, image, settings.palette)
+        for (path, write), path_tmp in zip(also, extra_tmps):
+            with writing(path):
+                write(world, path_tmp)
     return RenderResult(Path(output), frames, images, distinct, width, height, still)

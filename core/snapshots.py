@@ -20,7 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from .errors import Problem, ProblemsError, display_path
 from .userfiles import NO_SUCH_FILE, Refused, open_regular
 from .worldspec import MAX_SIZE
-from .recording import atomic_path
+from .recording import atomic_path, writing
 from .world import State, World
 
 #: Bumped when the layout changes; older files are refused with a clear message.
@@ -33,6 +33,12 @@ ELEMENT_ARRAYS = ("cells", "carry")
 
 def save_snapshot(world: World, path: Path) -> None:
     """Write ``world``'s state to ``path`` (atomically)."""
+    with atomic_path(path) as tmp, writing(path):
+        write_snapshot(world, tmp)
+
+
+def write_snapshot(world: World, path: Path) -> None:
+    """Write ``world``'s state to ``path`` as it is (see :func:`save_snapshot`)."""
     ruleset = world.ruleset
     meta = {
         "format": FORMAT,
@@ -45,9 +51,8 @@ def save_snapshot(world: World, path: Path) -> None:
     }
     arrays = {name: getattr(world.state, name) for name in State._fields}
     arrays["heat_cap"] = world.tables.heat_cap  # to keep temperatures if a mod changes an element's
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as out:
-            np.savez_compressed(out, meta=np.array(json.dumps(meta)), awake=world.awake, **arrays)
+    with open(path, "wb") as out:
+        np.savez_compressed(out, meta=np.array(json.dumps(meta)), awake=world.awake, **arrays)
 
 
 def load_snapshot(world: World, path: Path) -> list[str]:

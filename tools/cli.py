@@ -12,6 +12,7 @@ import click
 
 from sandmod import __version__
 from sandmod.errors import Problem, ProblemsError, display_path, printable
+from sandmod.recording import WriteError
 from sandmod.userfiles import Refused, check_output, inside
 
 EXIT_USER_ERROR = 2
@@ -142,6 +143,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     from sandmod.recording import output_bytes
     from sandmod.render import Framing, render_problems
     from sandmod.render import render as run
+    from sandmod.snapshots import write_snapshot
     from sandmod.warmup import compile_new_kernels, compile_parallel
 
     loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed, max_memory=max_memory)
@@ -173,6 +175,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
         fps=fps or settings.fps,
         loop=settings.loop if loop is None else loop,
         still=still,
+        also=[] if save_snapshot is None else [(save_snapshot, write_snapshot)],
     )
     with _writing(output):
         if quiet or not sys.stderr.isatty():
@@ -180,11 +183,6 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
         else:
             with click.progressbar(length=frames, label=f"{world.name}", file=sys.stderr) as bar:
                 result = run(loaded.world, recorder, output, progress=bar.update, **options)
-    if save_snapshot is not None:
-        from sandmod.snapshots import save_snapshot as save
-
-        with _writing(save_snapshot):
-            save(loaded.world, save_snapshot)
     if not quiet:
         extras = "".join(f", {what} {display_path(path)}" for what, path in (("still", still), ("snapshot", save_snapshot)) if path)
         click.echo(
@@ -210,11 +208,13 @@ def _thread_pool(most: int) -> None:
 
 @contextlib.contextmanager
 def _writing(path: Path):
-    """Turn a failure to write ``path`` (a full disk, a folder in the way) into a problem naming it."""
+    """Turn a failure to write ``path`` (a full disk, a folder in the way) into a problem naming it,
+    or naming the output a WriteError names."""
     try:
         yield
     except OSError as exc:
-        raise ProblemsError([Problem(display_path(path), None, "", f"cannot write: {exc.strerror or exc}")]) from None
+        target = exc.target if isinstance(exc, WriteError) else path
+        raise ProblemsError([Problem(display_path(target), None, "", f"cannot write: {exc.strerror or exc}")]) from None
 
 
 def _recorder_and_output(loaded, world: Path, output: Path | None, format_name: str | None):
@@ -894,5 +894,18 @@ def _bench_recording(formats, runs, thread_counts, as_json) -> None:
 
 
 def main() -> None:
-    """Entry point of the ``sandmod`` console script."""
+    """Entry point of the ``sandmod`` console script.
+
+    SIGTERM and SIGHUP end it as Ctrl-C does: by an exception, so that every
+    half-written output is removed on the way out; the exit status is 128 plus
+    the signal's number, as a shell reports a process the signal killed.
+    """
+    import signal
+
+    def leave(signum, frame):
+        raise SystemExit(128 + signum)
+
+    for name in ("SIGTERM", "SIGHUP"):
+        if hasattr(signal, name) and signal.getsignal(getattr(signal, name)) is signal.SIG_DFL:
+            signal.signal(getattr(signal, name), leave)
     cli(prog_name="sandmod")
