@@ -101,7 +101,7 @@ def load_world(
     modset: ModSet = find_mods(registry, world_mod_dirs(path, mod_dirs))
     ruleset = compile_mods(_select_for_world(modset, spec, source))
     memory = MemoryBudget(max_memory)
-    world = build_world(spec, ruleset, source, seed, memory)
+    world = build_world(spec, ruleset, source, seed, memory, _unloaded_elements(modset, ruleset))
     return LoadedWorld(path, spec, source, ruleset, world, registry, mod_warnings(spec, source, ruleset), memory)
 
 
@@ -136,3 +136,15 @@ def _select_for_world(modset: ModSet, spec: WorldFile, source: TomlSource):
         if missing:
             raise ProblemsError(missing)
     return modset.select(names)
+
+
+def _unloaded_elements(modset: ModSet, ruleset: Ruleset) -> dict[str, str]:
+    """Elements of the mods found but not loaded ('water' and 'water:water'), each to its mod."""
+    loaded = {m.name for m in ruleset.mods}
+    found: dict[str, str] = {}
+    for mod in modset.mods.values():
+        if mod.name not in loaded:
+            for element in mod.spec.elements:
+                found.setdefault(element, mod.name)
+                found[f"{mod.name}:{element}"] = mod.name
+    return found

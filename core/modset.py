@@ -8,13 +8,16 @@ lists every problem in every file.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
 from .errors import Problem, ProblemsError, display_path
-from .modspec import ModFile, version_matches
+from pydantic import ValidationError
+
+from .modspec import ModFile, ModInfo, version_matches
 from .registry import Registry
 from .tomlsource import TomlSource
 from .validation import validate
@@ -72,29 +75,30 @@ class ModSet:
             if mod.name in chosen:
                 continue
             chosen[mod.name] = mod
-            for i, (need, conditions) in enumerate(mod.spec.mod.requirements()):
-                found = self.mods.get(need)
-                if found is not None and not version_matches(found.spec.mod.version, conditions):
-                    problems.append(
-                        mod.source.problem(
-                            ("mod", "requires", i),
-                            f"requires mod '{mod.spec.mod.requires[i].strip()}', but {found.source.name} is version "
-                            f"{found.spec.mod.version}",
-                        )
-                    )
-                elif found is not None:
-                    stack.append(need)
-                elif need in self.broken:
-                    problems.append(mod.source.problem(("mod", "requires", i), f"requires mod '{need}', which has mistakes"))
-                else:
-                    problems.append(
-                        mod.source.problem(("mod", "requires", i), f"requires mod '{need}', which was not found")
-                    )
+            problems += requirement_problems(mod.spec.mod, mod.source, self.mods, self.broken)
+            stack += [need for need, _ in mod.spec.mod.requirements() if need in self.mods]
         if BASE_MOD not in self.mods:
             problems.append(Problem("mods", None, "", f"the '{BASE_MOD}' mod (empty, stone) was not found"))
         if problems:
             raise ProblemsError(problems)
         return _load_order(chosen)
+
+
+def requirement_problems(info: ModInfo, source: TomlSource, mods: dict[str, LoadedMod], broken: Iterable[str]) -> list[Problem]:
+    """What is wrong with the mods a mod's header requires: not found, with mistakes, another version."""
+    problems = []
+    for i, (need, conditions) in enumerate(info.requirements()):
+        found = mods.get(need)
+        if found is not None and not version_matches(found.spec.mod.version, conditions):
+            message = f"requires mod '{info.requires[i].strip()}', but {found.source.name} is version {found.spec.mod.version}"
+        elif found is not None:
+            continue
+        elif need in broken:
+            message = f"requires mod '{need}', which has mistakes"
+        else:
+            message = f"requires mod '{need}', which was not found"
+        problems.append(source.problem(("mod", "requires", i), message))
+    return problems
 
 
 def _load_order(mods: dict[str, LoadedMod]) -> list[LoadedMod]:
@@ -150,6 +154,7 @@ def discover_mods(
     loaded: list[LoadedMod] = []
 
     broken: set[str] = set()
+    headers: list[tuple[ModInfo, TomlSource]] = []  # of mods with mistakes elsewhere: their requires are checked too
 
     def add(source: TomlSource, plugin: str) -> None:
         try:
@@ -159,6 +164,8 @@ def discover_mods(
             info = source.data.get("mod")
             if isinstance(info, dict) and isinstance(info.get("name"), str):
                 broken.add(info["name"])
+                with contextlib.suppress(ValidationError):
+                    headers.append((ModInfo.model_validate(info), source))
 
     folders = [(entry.value, entry.plugin) for entry in registry.mod_dirs]
     for folder in extra_dirs:
@@ -198,4 +205,7 @@ def discover_mods(
             )
             continue
         by_name[mod.name] = mod
-    return ModSet(by_name, frozenset(broken - set(by_name))), problems
+    broken -= set(by_name)
+    for info, source in headers:
+        problems += requirement_problems(info, source, by_name, broken)
+    return ModSet(by_name, frozenset(broken)), problems

@@ -56,6 +56,7 @@ class _Builder:
     source: TomlSource
     world: World
     budget: MemoryBudget
+    unloaded: dict[str, str] = field(default_factory=dict)  # elements of mods found but not loaded -> their mod
     problems: list[Problem] = field(default_factory=list)
 
     def note(self, loc: Loc, message: str) -> None:
@@ -72,7 +73,9 @@ class _Builder:
         try:
             return self.ruleset.index(ref)
         except KeyError as exc:
-            self.note(loc, exc.args[0])
+            mod = self.unloaded.get(ref)
+            hint = f"; mod '{mod}' has it: add \"{mod}\" to [world] mods" if mod else ""
+            self.note(loc, exc.args[0] + hint)
             return None
 
     def area(self, loc: Loc, shape, what: str = "the shape", kept: bool = False) -> Callable[[np.ndarray], np.ndarray] | None:
@@ -160,13 +163,19 @@ class _Builder:
 
 
 def build_world(
-    spec: WorldFile, ruleset: Ruleset, source: TomlSource, seed: int | None = None, budget: MemoryBudget | None = None
+    spec: WorldFile,
+    ruleset: Ruleset,
+    source: TomlSource,
+    seed: int | None = None,
+    budget: MemoryBudget | None = None,
+    unloaded: dict[str, str] | None = None,
 ) -> World:
     """Paint ``spec``'s scene into a new world and set up what runs over frames.
 
     ProblemsError names unknown elements, shapes outside the world, unreadable
     pictures, timeline events that name no emitter or spray, and whatever
-    would pass the memory ``budget`` (by default, the default limit).
+    would pass the memory ``budget`` (by default, the default limit). An
+    unknown element that ``unloaded`` maps to a mod is named with that mod.
     """
     info = spec.world
     budget = budget or MemoryBudget()
@@ -174,7 +183,7 @@ def build_world(
     if over is not None:
         raise ProblemsError([source.problem(("world",), over)])
     world = World(ruleset, info.width, info.height, info.seed if seed is None else seed, info.gravity)
-    build = _Builder(spec, ruleset, source, world, budget)
+    build = _Builder(spec, ruleset, source, world, budget, unloaded or {})
     for number, shape in enumerate(spec.scene):  # in order: a fill sees what came before
         layer = build.layer(("scene", number), shape)
         if layer is not None:

@@ -522,6 +522,10 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
     from sandmod.compiler import compile_mods
 
     modset = find_mods(load_registry(), _mod_folders(mod_dirs))
+    unknown = [name for name in mods if name not in modset.mods]
+    if unknown:
+        found = ", ".join(sorted(modset.mods))
+        raise click.BadParameter(f"no mod called {', '.join(map(repr, unknown))} was found (found: {found})", param_hint="'--mod'")
     ruleset = compile_mods(modset.select(list(mods) or None))
     if pour is None:  # a powder or liquid of the user's own mods (the one just written, say), else sand
         wanted = {m.name: m for m in ruleset.mods if not mods or m.name in mods}

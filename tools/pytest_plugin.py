@@ -40,10 +40,16 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 
 
 def _looks_like_mod(path: Path) -> bool:
+    """Every TOML file in a mods/ folder is a mod, unless it is a world; one that does not even
+    parse is collected too, so that its problems fail the run instead of passing unseen."""
+    import tomllib
+
+    from sandmod.modset import is_world
+
     try:
-        return "[mod]" in path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return False
+        return not is_world(tomllib.loads(path.read_text(encoding="utf-8")))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError):  # ValueError covers TOMLDecodeError
+        return True
 
 
 def _runner_for(config: pytest.Config, folder: Path):
