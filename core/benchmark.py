@@ -113,6 +113,13 @@ SCENES: dict[str, Callable[[World, Ruleset], None]] = {
 }
 
 
+class _Result:
+    """A measurement that ``--json`` prints as one object."""
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
 @dataclass(frozen=True)
 class Bench:
     """What a bench run steps: a built-in scene at a size, or a world file; ``make`` builds it afresh."""
@@ -152,7 +159,7 @@ def world_bench(path: Path, *, mod_dirs: Sequence[Path] = (), seed: int | None =
 
 
 @dataclass(frozen=True)
-class BenchResult:
+class BenchResult(_Result):
     """One timed run; the JSON that ``sandmod bench --json`` prints."""
 
     scene: str
@@ -168,9 +175,6 @@ class BenchResult:
     compile_seconds: float  # the first step of a tiny world: compiling, or loading the cached kernels
     peak_memory_mb: float  # the process's peak resident memory
     state_bytes_per_cell: float  # the world's arrays, per-cell and per-chunk, over its cells
-
-    def as_dict(self) -> dict:
-        return asdict(self)
 
 
 def peak_memory_mb() -> float:
@@ -202,6 +206,82 @@ def _peak_working_set() -> int:
     if not ctypes.windll.psapi.GetProcessMemoryInfo(process, ctypes.byref(counters), counters.cb):
         return 0
     return counters.PeakWorkingSetSize
+
+
+#: The world ``render_peak_memory`` renders: a disc of sand above a pool of water on a stone floor.
+MEMORY_WORLD = """
+[world]
+width = {size}
+height = {size}
+mods = ["sand", "water"]
+
+[[scene]]
+shape = "rect"
+element = "stone"
+x = 0
+y = {floor}
+width = {size}
+height = 4
+
+[[scene]]
+shape = "rect"
+element = "water"
+x = 0
+y = {water}
+width = {size}
+height = {quarter}
+
+[[scene]]
+shape = "circle"
+element = "sand"
+x = {half}
+y = {quarter}
+radius = {radius}
+"""
+
+
+@dataclass(frozen=True)
+class MemoryResult(_Result):
+    """The peak memory of a render, measured in a process of its own, and what sandmod estimates first."""
+
+    width: int
+    height: int
+    frames: int
+    format: str
+    peak_mb: float
+    estimate_mb: float
+
+
+def render_peak_memory(size: int, frames: int = 4, output_format: str = "gif") -> MemoryResult:
+    """Render a ``size`` x ``size`` world for ``frames`` frames (an image each, one pixel a cell) in a
+    fresh process and return its peak resident memory beside the estimate the memory limit checks."""
+    import subprocess
+    import tempfile
+
+    from .limits import MemoryBudget
+    from .loading import read_world_spec
+
+    with tempfile.TemporaryDirectory() as folder:
+        world = Path(folder) / "w.toml"
+        quarter = size // 4
+        world.write_text(
+            MEMORY_WORLD.format(size=size, floor=size - 4, water=size - 4 - quarter, quarter=quarter, half=size // 2, radius=size // 8)
+        )
+        output = Path(folder) / f"out.{output_format}"
+        args = ["render", str(world), "-o", str(output), "--frames", str(frames), "--every", "1", "--scale", "1", "-q", "--max-memory", "none"]
+        code = (
+            "import sys; from sandmod import benchmark; from sandmod.tools.cli import cli\n"
+            f"try:\n    cli({args!r}, prog_name='sandmod')\nexcept SystemExit as end:\n    assert not end.code, end.code\n"
+            "print(benchmark.peak_memory_mb())"
+        )
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+        spec, _ = read_world_spec(world)
+    from .limits import WORLD_BYTES_PER_CELL
+
+    budget = MemoryBudget(None)
+    budget.take(spec.world.width * spec.world.height * WORLD_BYTES_PER_CELL, "the world")
+    budget.take(4 * size * size, "the frame")
+    return MemoryResult(size, size, frames, output_format, round(float(done.stdout.split()[-1]), 1), round(budget.used / 2**20, 1))
 
 
 def state_bytes(world: World) -> int:
@@ -317,7 +397,7 @@ def _import_kernel(path) -> ModuleType:
 
 
 @dataclass(frozen=True)
-class Comparison:
+class Comparison(_Result):
     """Two kernels timed on the same frames; the JSON that ``sandmod bench --against`` prints."""
 
     scene: str
@@ -331,12 +411,9 @@ class Comparison:
     speedup: float  # this kernel's speed over the other's
     same_frames: bool  # False: each stepped on from its own frames (--own-frames)
 
-    def as_dict(self) -> dict:
-        return asdict(self)
-
 
 @dataclass(frozen=True)
-class Turns:
+class Turns(_Result):
     """One thread count, timed in turns with others on the same frames (``sandmod bench --in-turns``)."""
 
     scene: str
@@ -347,9 +424,6 @@ class Turns:
     mcell_updates_per_second: float
     speedup: float  # over the first thread count asked for
     over_threads: int | str  # that count
-
-    def as_dict(self) -> dict:
-        return asdict(self)
 
 
 def _arrays(world: World) -> tuple[np.ndarray, ...]:
@@ -520,7 +594,7 @@ def numpy_image(world: World) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class PixelsResult:
+class PixelsResult(_Result):
     """A frame to palette indices, compiled and in numpy (``sandmod bench --pixels``)."""
 
     scene: str
@@ -528,9 +602,6 @@ class PixelsResult:
     height: int
     compiled_ms: float
     numpy_ms: float
-
-    def as_dict(self) -> dict:
-        return asdict(self)
 
 
 def time_pixels(bench: Bench, steps: int, repeats: int = 5) -> tuple[float, float]:
@@ -574,7 +645,7 @@ def max_threads() -> int:
 
 
 @dataclass(frozen=True)
-class RecordResult:
+class RecordResult(_Result):
     """One timed render: how the time splits between the kernel, building images and encoding them."""
 
     format: str
@@ -589,9 +660,6 @@ class RecordResult:
     images_per_second: float  # encoding alone
     encode_share: float  # of the whole render's time
     file_mb: float
-
-    def as_dict(self) -> dict:
-        return asdict(self)
 
 
 def record(bench: Bench, recorder, images: int, threads: int, folder) -> RecordResult:

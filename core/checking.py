@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Iterable
 
 from .errors import Problem, ProblemsError
+from .limits import DEFAULT_MAX_MEMORY
 from .registry import Registry
 
 
@@ -34,6 +35,7 @@ def check(
     mod_files: Iterable[Path] = (),
     worlds: Iterable[Path] = (),
     world_mod_dirs: Iterable[Path] = (),
+    max_memory: int | None = DEFAULT_MAX_MEMORY,
 ) -> Report:
     """Check the mods in ``folders`` and ``mod_files`` (with the plugins' mods), and the ``worlds``
     (each with the mods beside it and in ``world_mod_dirs``)."""
@@ -67,7 +69,7 @@ def check(
     for world in worlds:
         report.worlds += 1
         try:
-            report.warnings += load_world(world, mod_dirs=world_mod_dirs, registry=registry).warnings
+            report.warnings += load_world(world, mod_dirs=world_mod_dirs, registry=registry, max_memory=max_memory).warnings
         except ProblemsError as exc:
             report.problems.extend(exc.problems)
     report.problems = list(dict.fromkeys(report.problems))

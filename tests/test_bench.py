@@ -316,3 +316,11 @@ def test_a_kernel_file_loads_from_numbas_cache_in_a_later_process(tmp_path):
     for _ in range(2):  # compiled and cached, then loaded from the cache
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
         assert (done.returncode, done.stdout.strip()) == (0, "2"), done.stderr
+
+
+def test_bench_memory_measures_a_render_in_a_process_of_its_own_and_the_estimate_covers_it():
+    result = CliRunner().invoke(cli, ["bench", "--memory", "512", "--json"], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    found = json.loads(result.output)
+    assert found["width"] == found["height"] == 512 and found["format"] == "gif"
+    assert 0 < found["peak_mb"] <= found["estimate_mb"]

@@ -109,6 +109,15 @@ _mods_option = click.option(
 )
 
 
+_max_memory_option = click.option(
+    "--max-memory",
+    type=MemorySize(),
+    default="4G",
+    show_default=True,
+    help="Refuse, before it starts, a world or render that would take more memory than this (e.g. 16G; none: no limit).",
+)
+
+
 @cli.command()
 @click.argument("world", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", type=click.Path(path_type=Path), help="Output file, or folder for png-frames (default: WORLD.gif here).")
@@ -124,8 +133,7 @@ _mods_option = click.option(
 @click.option("--save-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Save the final state to an .npz file.")
 @click.option("--from-snapshot", type=click.Path(dir_okay=False, path_type=Path), help="Start from a saved state (and its frame and seed).")
 @click.option("--threads", type=ThreadCount(), help="Threads to step the world on, or auto (the default: as many as pay, see below); the frames are the same on any number.")
-@click.option("--max-memory", type=MemorySize(), default="4G", show_default=True,
-              help="Refuse, before it starts, a render that would take more memory than this (e.g. 16G; none: no limit).")
+@_max_memory_option
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary.")
 @_mods_option
 def render(world, output, format_name, frames, every, seed, scale, fps, loop, crop, still, save_snapshot, from_snapshot, threads, max_memory, quiet, mod_dirs) -> None:
@@ -358,8 +366,9 @@ def _table(header: tuple[str, ...], rows: list[tuple[str, ...]]) -> None:
 
 @cli.command()
 @click.argument("paths", nargs=-1, type=click.Path(path_type=Path))
+@_max_memory_option
 @_mods_option
-def validate(paths, mod_dirs) -> None:
+def validate(paths, max_memory, mod_dirs) -> None:
     """Check mod files, world files and folders of either; exit 2 if anything is wrong.
 
     With no PATHS, checks every mod found (the bundled ones and ./mods).
@@ -389,7 +398,7 @@ def validate(paths, mod_dirs) -> None:
             mod_files.append(path)
         else:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
-    report = check(load_registry(), folders, mod_files, worlds, _mod_folders(mod_dirs))
+    report = check(load_registry(), folders, mod_files, worlds, _mod_folders(mod_dirs), max_memory)
     for warning in report.warnings:
         click.echo(printable(f"warning: {warning}"), err=True)
     if problems or report.problems:
@@ -649,6 +658,8 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--steps", type=click.IntRange(1, 100000), help="Steps to time.  [default: 1000; a world's own frames]")
 @click.option("--threads", "thread_counts", multiple=True, type=ThreadCount(), help="Threads, or auto (repeatable; default: auto).")
 @click.option("--pixels", is_flag=True, help="Time turning a frame into palette indices instead, compiled against numpy.")
+@click.option("--memory", "memory_sizes", multiple=True, type=click.IntRange(64, 16384), metavar="SIZE",
+              help="Measure the peak memory of rendering a SIZE x SIZE world (repeatable), against the estimate the memory limit checks.")
 @click.option("--busy", type=click.IntRange(0, 256), default=0, help="Keep this many other processes busy on the CPUs while timing, as a user's machine is.")
 @click.option("--no-sleep", is_flag=True, help="Update every chunk every step, as if none could sleep.")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed.  [default: 0; a world's own]")
@@ -661,7 +672,7 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
 @click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
 @_mods_option
-def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
+def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
     """Time the kernel on a built-in scene or a world file: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -681,6 +692,10 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, se
     --pixels times turning a frame (after up to 100 steps) into palette
     indices, the compiled way World.image does and the numpy way it did,
     in turns, on one thread.
+
+    --memory SIZE renders a SIZE x SIZE world for a few frames in a fresh
+    process and prints its peak memory beside the estimate that render's
+    --max-memory is checked against.
 
     --busy N keeps N other processes spinning on the CPUs while it times,
     as on a user's machine: with --threads auto --threads 1 --in-turns it
@@ -706,6 +721,16 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, busy, no_sleep, se
     """
     from sandmod import benchmark, kernelcache
 
+    if memory_sizes:
+        for side in memory_sizes:
+            found = benchmark.render_peak_memory(side)
+            _report(
+                found,
+                as_json,
+                f"render {side}x{side}, {found.frames} frames to {found.format}: peak {found.peak_mb / 1024:.2f} GB "
+                f"(estimated {found.estimate_mb / 1024:.2f} GB)",
+            )
+        return
     if size is not None and worlds and not scenes:
         raise click.UsageError("--size sizes the built-in scenes; a world file has its own size")
     if sum(map(bool, (against, in_turns, yardstick))) > 1:
