@@ -19,8 +19,9 @@ DEFAULT_MAX_MEMORY = 4 * 2**30
 WORLD_BYTES_PER_CELL = 24
 #: Bytes a picture takes per pixel while its colours are matched to the legend (measured: 62).
 PICTURE_BYTES_PER_PIXEL = 72
-#: What the interpreter, numpy, numba and the compiled kernel take before any world.
-BASELINE_BYTES = 256 * 2**20
+#: What the interpreter, numpy, numba and the kernel take before any world (compiling it, on a first run,
+#: takes 370 MB at its peak).
+BASELINE_BYTES = 512 * 2**20
 
 _SIZE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
 _UNITS = {"": 1, "k": 2**10, "m": 2**20, "g": 2**30, "t": 2**40}

@@ -114,7 +114,7 @@ def test_mutated_mods_validate_cleanly(text):
 def test_mutated_worlds_validate_and_render_cleanly(text):
     Path("w.toml").write_text(text, encoding="utf-8", errors="surrogatepass")
     _clean_exit(invoke("validate", "w.toml"))
-    result = invoke("render", "w.toml", "--frames", "3", "-q", "-o", "out.gif", "--max-memory", "600M")
+    result = invoke("render", "w.toml", "--frames", "3", "-q", "-o", "out.gif", "--max-memory", "1G")
     _clean_exit(result)
     assert Path("out.gif").exists() == (result.exit_code == 0)
     _finished_only("w.toml", "out.gif")

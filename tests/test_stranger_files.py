@@ -15,6 +15,7 @@ import pytest
 from PIL import Image
 
 from conftest import invoke
+from sandmod.limits import BASELINE_BYTES, WORLD_BYTES_PER_CELL
 
 SMALL = """
 [world]
@@ -170,8 +171,9 @@ def test_a_world_larger_than_the_memory_limit_is_refused_before_it_is_made():
 def test_renders_that_would_keep_too_many_images_or_too_large_ones_are_refused_before_they_run():
     world()
     refused(invoke("render", "w.toml", "--frames", "100000", "--scale", "16", "-o", "a.webp"), "a.webp: webp keeping 50001 images")
-    refused(invoke("render", "w.toml", "--frames", "10", "--scale", "16", "-o", "b.webp", "--max-memory", "260M"), "b.webp: webp keeping 6 images")
-    assert invoke("render", "w.toml", "--frames", "10", "--scale", "16", "-o", "b.gif", "--max-memory", "260M").exit_code == 0  # streamed
+    tight = f"{(BASELINE_BYTES >> 20) + 4}M"  # room for the world and one frame, not for six kept
+    refused(invoke("render", "w.toml", "--frames", "10", "--scale", "16", "-o", "b.webp", "--max-memory", tight), "b.webp: webp keeping 6 images")
+    assert invoke("render", "w.toml", "--frames", "10", "--scale", "16", "-o", "b.gif", "--max-memory", tight).exit_code == 0  # streamed
     Path("b.gif").unlink()
     world(SMALL.replace("width = 32", "width = 4096"))
     refused(invoke("render", "w.toml", "--frames", "2", "--scale", "16"), "gif images are at most 65535 pixels a side")
@@ -182,7 +184,8 @@ def test_renders_that_would_keep_too_many_images_or_too_large_ones_are_refused_b
 def test_a_picture_with_more_pixels_than_the_limit_allows_is_refused_from_its_header():
     Image.new("P", (2500, 2500)).save("big.png")
     world(SMALL + '\n[[scene]]\nshape = "image"\nfile = "big.png"\nmatch = "nearest"\nlegend = { "#000000" = "sand" }\n')
-    refused(invoke("render", "w.toml", "--max-memory", "600M"), "big.png has more pixels than the memory limit allows")
+    limit = f"{(BASELINE_BYTES >> 20) + 300}M"  # the picture would take 2500 x 2500 x 72 bytes: 430 MB
+    refused(invoke("render", "w.toml", "--max-memory", limit), "big.png has more pixels than the memory limit allows")
 
 
 def test_timeline_paintings_keep_only_their_own_box():
@@ -194,7 +197,7 @@ def test_timeline_paintings_keep_only_their_own_box():
     )
     world(SMALL.replace("width = 32", "width = 1024").replace("height = 32", "height = 1024") + events)
     loaded = load_world("w.toml")
-    kept = loaded.memory.used - 1024 * 1024 * 28
+    kept = loaded.memory.used - BASELINE_BYTES - 1024 * 1024 * WORLD_BYTES_PER_CELL
     assert kept < 300 * 2**20  # a whole-world mask each would be 3 GB
 
 
