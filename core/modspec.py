@@ -31,7 +31,9 @@ import re
 import textwrap
 from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from packaging.specifiers import InvalidSpecifier, SpecifierSet
+from packaging.version import InvalidVersion, Version
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
 from .layout import ARCHETYPES, MAX_SPEED, MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: F401  (taken from here too)
@@ -57,28 +59,34 @@ PARTICLE_ID = "base:particle"
 MAX_BLAST_RADIUS = 32
 
 
-VERSION = r"\d+(?:\.\d+)*"
-VERSION_OPERATOR = r">=|<=|==|!=|>|<"
-REQUIREMENT = rf"{MOD_NAME}(?:\s*(?:{VERSION_OPERATOR})\s*{VERSION}(?:\s*,\s*(?:{VERSION_OPERATOR})\s*{VERSION})*)?"
-Requirement = Annotated[str, Field(pattern=rf"^\s*{REQUIREMENT}\s*$")]
+def _requirement(text: str) -> str:
+    """A mod's name and an optional version range in the standard (PEP 440) spelling: 'water',
+    'water>=2.0,<3', 'water~=2.1', 'water==2.*'."""
+    found = re.fullmatch(rf"\s*({MOD_NAME})\s*(.*?)\s*", text)
+    if found is None:
+        raise ValueError(f"must be a mod name, maybe with versions: 'water' or 'water>=2.0,<3' (got {text!r})")
+    try:
+        SpecifierSet(found.group(2))
+    except InvalidSpecifier:
+        raise ValueError(f"{found.group(2)!r} is not a version range like '>=2.0,<3', '~=2.1' or '==2.*'") from None
+    return text
 
 
-def version_tuple(version: str) -> tuple[int, ...]:
-    """'1.2.0-beta' -> (1, 2, 0): the numbers of the release, for comparing."""
-    numbers = re.match(r"\d+(?:\.\d+)*", version)
-    return tuple(int(n) for n in numbers.group().split(".")) if numbers else (0,)
+def _version(text: str) -> str:
+    try:
+        Version(text)
+    except InvalidVersion:
+        raise ValueError(f"must be a version like '1.2.0' or '2.0.0rc1' (got {text!r})") from None
+    return text
 
 
-def version_matches(version: str, conditions: list[tuple[str, tuple[int, ...]]]) -> bool:
-    """Whether ``version`` meets every (operator, version) condition."""
-    have = version_tuple(version)
-    for op, wanted in conditions:
-        width = max(len(have), len(wanted))
-        a, b = have + (0,) * (width - len(have)), wanted + (0,) * (width - len(wanted))
-        ok = {">=": a >= b, "<=": a <= b, "==": a == b, "!=": a != b, ">": a > b, "<": a < b}[op]
-        if not ok:
-            return False
-    return True
+Requirement = Annotated[str, AfterValidator(_requirement)]
+
+
+def version_matches(version: str, versions: SpecifierSet) -> bool:
+    """Whether ``version`` lies in the range ``versions``: as pip decides, so a pre-release
+    (2.0.0rc1) meets only a range that names a pre-release."""
+    return versions.contains(Version(version))
 
 
 def _as_list(value: object) -> object:
@@ -93,28 +101,22 @@ class ModInfo(_Strict):
     """The ``[mod]`` table: who this mod is and what it builds on."""
 
     name: ModName = Field(description="The mod's name; element ids inside it are 'NAME:element'.")
-    version: str = Field(
-        "0.1.0",
-        pattern=r"^\d+(\.\d+){0,2}([.+-][0-9A-Za-z.+-]*)?$",
-        description="The mod's version, e.g. '1.2.0'.",
+    version: Annotated[str, AfterValidator(_version)] = Field(
+        "0.1.0", description="The mod's version, e.g. '1.2.0' (the standard, PEP 440: '2.0.0rc1' is a pre-release)."
     )
     description: str = Field("", max_length=2000, description="One or two sentences for 'sandmod list'.")
     requires: list[Requirement] = Field(
         default_factory=list,
         description="Mods whose elements this mod names, loaded first; a version range may follow "
-        "the name: 'water>=2.0,<3'.",
+        "the name, as pip writes them: 'water>=2.0,<3', 'water~=2.1', 'water==2.*'.",
     )
 
-    def requirements(self) -> list[tuple[str, list[tuple[str, tuple[int, ...]]]]]:
-        """``requires`` parsed: each mod's name and its version conditions, like ``[('>=', (2, 0))]``."""
+    def requirements(self) -> list[tuple[str, SpecifierSet]]:
+        """``requires`` parsed: each mod's name and the range of its versions that will do."""
         parsed = []
         for text in self.requires:
-            name = re.match(MOD_NAME, text.strip()).group()
-            conditions = [
-                (m.group(1), version_tuple(m.group(2)))
-                for m in re.finditer(rf"({VERSION_OPERATOR})\s*({VERSION})", text[len(name) :])
-            ]
-            parsed.append((name, conditions))
+            found = re.fullmatch(rf"\s*({MOD_NAME})\s*(.*?)\s*", text)
+            parsed.append((found.group(1), SpecifierSet(found.group(2))))
         return parsed
 
     @property
@@ -567,7 +569,6 @@ PATTERN_HINTS.update(
         f"^{NAME}$": "must be a lower-case name like 'acid_proof'",
         f"^{SELECTOR}$": "must be an element ('water'), a tag ('#metal'), '*', or one of those after '!'",
         r"^#[0-9a-fA-F]{6}$": "must be a colour like '#c2b280'",
-        f"^\\s*{REQUIREMENT}\\s*$": "must be a mod name, maybe with versions: 'water' or 'water>=2.0,<3'",
         f"^{TEST_NAME}$": "must be a short name like 'sinks_in_water' (lower case, digits, _ and -)",
     }
 )

@@ -108,7 +108,22 @@ def test_requires_with_version_ranges(registry, tmp_path):
     assert problems('"sand", "water==1.0"') == ["m.toml:3:1: mod.requires.1: requires mod 'water==1.0', but mods/water.toml is version 2.0.0"]
     with pytest.raises(ProblemsError) as caught:
         find_mods(registry, [write_mods(tmp_path / "bad", {"m.toml": '[mod]\nname = "m"\nrequires = ["water>>2"]\n'})])
-    assert str(caught.value).endswith("mod.requires.0: must be a mod name, maybe with versions: 'water' or 'water>=2.0,<3' (got 'water>>2')")
+    assert str(caught.value).endswith("mod.requires.0: '>>2' is not a version range like '>=2.0,<3', '~=2.1' or '==2.*'")
+
+
+def test_requires_follows_the_version_standard():
+    from packaging.specifiers import SpecifierSet
+
+    from sandmod.modspec import ModInfo, version_matches
+
+    def meets(version: str, wanted: str) -> bool:
+        return version_matches(version, SpecifierSet(wanted))
+
+    assert not meets("2.0.0rc1", ">=2.0") and meets("2.0.0rc1", ">=2.0rc1")  # a pre-release only where one is named
+    assert meets("2.1.5", "~=2.1") and not meets("3.0", "~=2.1")
+    assert meets("2.7", "==2.*") and not meets("3.0", "==2.*")
+    assert meets("1.2.0-beta", "==1.2.0b0") and ModInfo(name="m", version="2.0.0-rc1").version == "2.0.0-rc1"
+    assert ModInfo(name="m", requires=[" water ~= 2.1 "]).requirements()[0][0] == "water"
 
 
 def test_list_provenance_shows_overrides(tmp_path, monkeypatch):
