@@ -191,6 +191,9 @@ def discover_mods(
         except ProblemsError as exc:
             problems.extend(exc.problems)
             continue
+        except Exception as exc:  # the loader's bug: named with its plugin, not a traceback
+            problems.append(Problem(display_path(path), None, "", f"the {loader.plugin} plugin's loader failed: {exc!r}"))
+            continue
         if not is_world(source.data):
             add(source, plugin)
     for entry in registry.mods:

@@ -87,7 +87,13 @@ def make_plugin_manager(*, entry_points: bool = True) -> pluggy.PluginManager:
 
 
 def collect(pm: pluggy.PluginManager) -> Registry:
-    """Call every registering hook and gather what the plugins gave."""
+    """Call every registering hook and gather what the plugins gave; ProblemsError names each
+    plugin that implements a hook sandmod does not have (a misspelling) or fails to register."""
+    try:
+        pm.check_pending()  # a hook marked but misspelled would otherwise never be called
+    except pluggy.PluginValidationError as exc:
+        known = ", ".join(sorted(name for name in dir(hooks) if name.startswith("register_")))
+        raise ProblemsError([Problem(pm.get_name(exc.plugin) or "plugins", None, "", f"{exc} (sandmod's hooks: {known})")]) from None
     registry = Registry()
     problems: list[Problem] = []
 
@@ -98,6 +104,8 @@ def collect(pm: pluggy.PluginManager) -> Registry:
                 impl.function(register=make_register(impl.plugin_name))
             except ProblemsError as exc:
                 problems.extend(exc.problems)
+            except Exception as exc:  # a plugin's bug is its problem, named, not our traceback
+                problems.append(Problem(impl.plugin_name, None, hook_name, f"failed: {exc!r}"))
 
     def mod_dir(plugin: str) -> Callable[[Path], None]:
         def register(path: Path) -> None:
@@ -111,14 +119,18 @@ def collect(pm: pluggy.PluginManager) -> Registry:
 
     def mod_loader(plugin: str) -> Callable[[str, hooks.ModLoader], None]:
         def register(suffix: str, load: hooks.ModLoader) -> None:
-            if not (suffix.startswith(".") and callable(load)):
-                raise TypeError(f"plugin {plugin}: register(suffix, load) needs '.ext' and a function")
+            if not (isinstance(suffix, str) and suffix.startswith(".") and callable(load)):
+                problems.append(Problem(plugin, None, "register_mod_loaders", f"register(suffix, load) needs '.ext' and a function, got {suffix!r}, {load!r}"))
+                return
             registry.mod_loaders[suffix.lower()] = Registered(load, plugin)
 
         return register
 
     def mod(plugin: str) -> Callable[[Mapping[str, Any], str], None]:
         def register(data: Mapping[str, Any], origin: str) -> None:
+            if not isinstance(data, Mapping):
+                problems.append(Problem(plugin, None, "register_mods", f"register(data, origin) needs a mapping, got {data!r}"))
+                return
             registry.mods.append(Registered(TomlSource(origin, "", dict(data)), plugin))
 
         return register
@@ -126,7 +138,8 @@ def collect(pm: pluggy.PluginManager) -> Registry:
     def recorder(plugin: str) -> Callable[[RecorderSpec], None]:
         def register(spec: RecorderSpec) -> None:
             if not isinstance(spec, RecorderSpec):
-                raise TypeError(f"plugin {plugin}: register() needs a RecorderSpec, got {spec!r}")
+                problems.append(Problem(plugin, None, "register_recorders", f"register() needs a RecorderSpec, got {spec!r}"))
+                return
             registry.recorders[spec.name] = Registered(spec, plugin)
 
         return register

@@ -180,3 +180,41 @@ def test_a_finished_render_gets_ordinary_file_permissions(tmp_path, ruleset):
     plain.write_text("")
     assert out.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
     assert os.access(out, os.R_OK)
+
+
+def test_a_misspelled_hook_and_bad_registrations_are_problems_naming_the_plugin():
+    from sandmod.errors import ProblemsError
+    from sandmod.hooks import hookimpl
+
+    class Misspelled:
+        @hookimpl
+        def register_recorder(self, register):  # no such hook: register_recorders
+            pass
+
+    pm = make_plugin_manager(entry_points=False)
+    pm.register(Misspelled(), name="typo-plugin")
+    with pytest.raises(ProblemsError) as caught:
+        collect(pm)
+    assert str(caught.value).startswith("typo-plugin: ") and "register_recorder" in str(caught.value)
+
+    class Careless:
+        @hookimpl
+        def register_mod_loaders(self, register):
+            register("toml", None)
+
+        @hookimpl
+        def register_recorders(self, register):
+            register("gif")
+
+        @hookimpl
+        def register_mods(self, register):
+            raise RuntimeError("oops")
+
+    pm = make_plugin_manager(entry_points=False)
+    pm.register(Careless(), name="careless")
+    with pytest.raises(ProblemsError) as caught:
+        collect(pm)
+    lines = sorted(str(p) for p in caught.value.problems)
+    assert [line.split(":")[:2] for line in lines] == [
+        ["careless", " register_mod_loaders"], ["careless", " register_mods"], ["careless", " register_recorders"]
+    ]
