@@ -35,7 +35,8 @@ def load_registry(pm: pluggy.PluginManager | None = None) -> Registry:
 def load_ruleset(
     mods: Sequence[str] | None = None, mod_dirs: Iterable[Path] = (), registry: Registry | None = None
 ) -> Ruleset:
-    """Compile the named mods (all found when ``None``) from the plugins' folders and ``mod_dirs``."""
+    """Compile the named mods (all found when ``None``) from the plugins' folders and ``mod_dirs``
+    (``mod_folders(mod_dirs)`` adds ``./mods``, as the command line does)."""
     registry = registry or load_registry()
     return compile_mods(find_mods(registry, mod_dirs).select(mods))
 
@@ -63,10 +64,15 @@ class LoadedWorld:
         return [self.path, *(folder / shape.file for shape in shapes if isinstance(shape, Picture))]
 
 
-def world_mod_dirs(path: Path, extra: Iterable[Path] = ()) -> list[Path]:
-    """Mod folders for a world: a ``mods/`` beside the world file, then ``extra``."""
-    beside = Path(path).parent / "mods"
-    return ([beside] if beside.is_dir() else []) + [Path(p) for p in extra]
+def mod_folders(extra: Iterable[Path] = (), world: Path | None = None) -> list[Path]:
+    """The folders mods are read from besides the plugins': a ``mods/`` beside ``world``, ``./mods``,
+    then ``extra`` (each folder once)."""
+    named = [Path(p) for p in extra]
+    found = ([Path(world).parent / "mods"] if world is not None else []) + [Path("mods")]
+    unique: dict[Path, Path] = {}
+    for folder in [*(f for f in found if f.is_dir()), *named]:  # a folder the user named must exist: find_mods says so
+        unique.setdefault(folder.resolve(), folder)
+    return list(unique.values())
 
 
 def read_world_spec(path: str | Path) -> tuple[WorldFile, TomlSource]:
@@ -90,6 +96,9 @@ def load_world(
 ) -> LoadedWorld:
     """Read a world file, load the mods it asks for and paint its scene.
 
+    Mods are found as the command line finds them: the plugins' (the bundled
+    ones), a ``mods/`` folder beside the world file, ``./mods`` and ``mod_dirs``.
+
     What the world would take is checked against ``max_memory`` bytes (None:
     no limit) before it is allocated; past it, a ProblemsError says how much.
     """
@@ -98,7 +107,7 @@ def load_world(
     path = Path(path)
     spec, source = read_world_spec(path)
     registry = registry or load_registry()
-    modset: ModSet = find_mods(registry, world_mod_dirs(path, mod_dirs))
+    modset: ModSet = find_mods(registry, mod_folders(mod_dirs, path))
     ruleset = compile_mods(_select_for_world(modset, spec, source))
     memory = MemoryBudget(max_memory)
     world = build_world(spec, ruleset, source, seed, memory, _unloaded_elements(modset, ruleset))

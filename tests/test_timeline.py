@@ -221,3 +221,19 @@ erase = { shape = "circle", element = "sand", x = 5, y = 5, radius = 2 }
         "w.toml:21:1: timeline.1.frame: must be >= 0 (got -1)",
         "w.toml:22:1: timeline.1.erase: 'erase' empties its cells; leave 'element' out (or 'paint' with it)",
     ]
+
+
+def test_load_world_finds_mods_as_the_command_line_does(tmp_path, monkeypatch):
+    from sandmod.loading import load_world
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mods").mkdir()
+    (tmp_path / "mods" / "goo.toml").write_text(
+        '[mod]\nname = "goo"\n[elements.goo]\narchetype = "liquid"\ndensity = 1.5\ndispersion = 2\ncolor = "#33aa44"\n'
+    )
+    (tmp_path / "worlds").mkdir()
+    (tmp_path / "worlds" / "w.toml").write_text(
+        '[world]\nwidth = 8\nheight = 8\nmods = ["goo"]\n[[scene]]\nshape = "rect"\nelement = "goo"\nx = 1\ny = 1\nwidth = 2\nheight = 2\n'
+    )
+    loaded = load_world("worlds/w.toml")  # goo is in ./mods, not beside the world
+    assert (loaded.world.cells == loaded.ruleset.index("goo")).sum() == 4

@@ -43,7 +43,9 @@ def _counted(count: int, noun: str) -> str:
 
 def _mod_folders(mod_dirs) -> list[Path]:
     """./mods when there is one, then every --mods DIR (a world's own mods/ beside it comes first: see load_world)."""
-    return ([Path("mods")] if Path("mods").is_dir() else []) + list(mod_dirs)
+    from sandmod.loading import mod_folders
+
+    return mod_folders(mod_dirs)
 
 
 def _say(message: str) -> None:
