@@ -132,9 +132,10 @@ def test_block(element: str, archetype: str = "powder") -> str:
 
 
 def new_mod(name: str, archetype: str = "powder", like: BaseModel | None = None) -> str:
-    """A new mod file: the [mod] table, one element named after the mod, and a test."""
-    header = mod_header(name, f"{name.replace('_', ' ').capitalize()}: what this mod adds.", [])
-    return f"{header}\n{element_block(name, archetype, like)}\n{test_block(name, archetype)}"
+    """A new mod file: the [mod] table, one element named after the mod ('my-mod' makes 'my_mod'), and a test."""
+    element = name.replace("-", "_")
+    header = mod_header(name, f"{element.replace('_', ' ').capitalize()}: what this mod adds.", [])
+    return f"{header}\n{element_block(element, archetype, like)}\n{test_block(element, archetype)}"
 
 
 def add_element(text: str, origin: str, name: str, archetype: str, like: BaseModel | None = None) -> str:

@@ -447,3 +447,10 @@ def test_explosions_and_temperatures_in_world_files_are_checked():
         "blast.toml:17:1: explosions.1.leaves: unknown element 'smok' (did you mean 'smoke'?)",
     ]
     assert not list(Path(".").glob("blast*.gif"))
+
+
+def test_new_mod_takes_every_name_the_mod_format_does():
+    result = invoke("new", "mod", "my-mod")
+    assert result.exit_code == 0, result.output
+    assert invoke("validate", "mods").exit_code == 0
+    assert "[elements.my_mod]" in Path("mods/my-mod.toml").read_text()

@@ -12,6 +12,7 @@ import click
 
 from sandmod import __version__
 from sandmod.errors import Problem, ProblemsError, display_path, printable
+from sandmod.modspec import MOD_NAME, NAME
 from sandmod.recording import WriteError
 from sandmod.userfiles import Refused, check_output, inside
 
@@ -474,14 +475,14 @@ _ARCHETYPES = ("static", "powder", "liquid", "gas", "particle")
 
 
 @new.command("mod")
-@click.argument("name", callback=_name(r"[a-z][a-z0-9_]*", "mod name"))
+@click.argument("name", callback=_name(MOD_NAME, "mod name"))
 @click.option("--archetype", type=click.Choice(_ARCHETYPES), help="How its first element moves (default: powder, or --like's).")
 @click.option("--like", help="Start the first element from an existing element's parameters.")
 @click.option("--dir", "folder", type=click.Path(file_okay=False, path_type=Path), default=Path("mods"), show_default=True,
               help="The folder to write the new mod in.")
 @_mods_option
 def new_mod(name, archetype, like, folder, mod_dirs) -> None:
-    """Write DIR/NAME.toml: a mod with one element called NAME and a test of it."""
+    """Write DIR/NAME.toml: a mod with one element called NAME (with _ for -) and a test of it."""
     from sandmod import scaffold
 
     spec = _like(like, mod_dirs)
@@ -493,7 +494,7 @@ def new_mod(name, archetype, like, folder, mod_dirs) -> None:
 
 
 @new.command("element")
-@click.argument("name", callback=_name(r"[a-z][a-z0-9_]*", "element name"))
+@click.argument("name", callback=_name(NAME, "element name"))
 @click.option("--archetype", type=click.Choice(_ARCHETYPES), help="How it moves (default: --like's, else powder).")
 @click.option("--like", help="Start from an existing element's parameters (those its archetype accepts).")
 @click.option("--mod", "mod_file", type=click.Path(dir_okay=False, path_type=Path), help="Add it to this mod file instead of a new mod.")
