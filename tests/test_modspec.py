@@ -137,3 +137,13 @@ def test_missing_mod_table_and_bad_mod_name():
 
 def test_invalid_toml_names_its_line():
     assert check('[mod]\nname = "m"\ncolor = #fff\n') == ["m.toml:3:9: invalid TOML: Invalid value"]
+
+
+def test_the_archetypes_are_one_list():
+    import typing
+
+    from sandmod import modspec
+    from sandmod.layout import ARCHETYPES
+
+    members = typing.get_args(typing.get_args(modspec.Element)[0])
+    assert tuple(typing.get_args(m.model_fields["archetype"].annotation)[0] for m in members) == ARCHETYPES

@@ -12,7 +12,7 @@ import click
 
 from sandmod import __version__
 from sandmod.errors import Problem, ProblemsError, display_path, printable
-from sandmod.modspec import MOD_NAME, NAME
+from sandmod.modspec import ARCHETYPES, MOD_NAME, NAME
 from sandmod.recording import WriteError
 from sandmod.userfiles import Refused, check_output, inside
 
@@ -471,7 +471,7 @@ def new() -> None:
     """Start a new mod or element from a commented, valid template."""
 
 
-_ARCHETYPES = ("static", "powder", "liquid", "gas", "particle")
+_ARCHETYPES = tuple(name for name in ARCHETYPES if name != "empty")  # what a new element may be
 
 
 @new.command("mod")
