@@ -8,6 +8,8 @@ from typing import Callable
 
 import numpy as np
 
+from pydantic import BaseModel, ConfigDict
+
 from .compiler import Ruleset
 from .errors import Problem, ProblemsError
 from .limits import PICTURE_BYTES_PER_PIXEL, WORLD_BYTES_PER_CELL, MemoryBudget
@@ -15,9 +17,11 @@ from .pictures import PictureError, fit, hex_rgb, legend_indices, read_rgba
 from .shapes import Patch, circle_mask, fill_mask, rect_mask, stroke_mask
 from .tomlsource import Loc, TomlSource
 from .userfiles import Refused, inside
+from .validation import validate
 from .world import Emitter, Heater, Painting, Spray, Switches, World
 from .worldspec import (
     Burst,
+    Shape,
     CircleArea,
     FillArea,
     LineArea,
@@ -51,7 +55,7 @@ def shape_mask(shape: RectArea | CircleArea | LineArea | StrokeArea | FillArea, 
 class _Builder:
     """Turns a world file's parts into what the world runs, collecting every problem on the way."""
 
-    spec: WorldFile
+    spec: WorldFile | None  # None: a lone shape (see paint_shape)
     ruleset: Ruleset
     source: TomlSource
     world: World
@@ -258,3 +262,25 @@ def _check_names(spec: WorldFile, build: _Builder) -> None:
             if name is not None and name not in named:
                 known = f"named: {', '.join(sorted(named))}" if named else "none has a name"
                 build.note(("timeline", number, action), f"no emitter or spray is called '{name}' ({known})")
+
+
+class _OneShape(BaseModel):
+    """A lone shape, validated as a world file's would be."""
+
+    model_config = ConfigDict(extra="forbid")
+    shape: Shape
+
+
+def paint_shape(world: World, table: dict, origin: str = "paint_shape") -> int:
+    """Paint ``table``, a shape as a world file's ``[[scene]]`` writes it, into ``world`` (see
+    :meth:`World.paint_shape`); ProblemsError names each mistake, with ``origin`` for a file."""
+    source = TomlSource(origin, "", {"shape": table}, folder=Path.cwd())
+    shape = validate(_OneShape, source).shape
+    build = _Builder(None, world.ruleset, source, world, MemoryBudget(None))
+    layer = build.layer(("shape",), shape)
+    if build.problems or layer is None:
+        raise ProblemsError(build.problems)
+    painted = world.paint_layer(layer(world.cells))
+    if getattr(shape, "temperature", None) is not None:
+        world.set_temperature(painted, shape.temperature)
+    return int(painted.sum())

@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import functools
 import math
-from time import perf_counter
 from dataclasses import dataclass
-from typing import Callable, NamedTuple
+from pathlib import Path
+from time import perf_counter
+from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
 
@@ -523,6 +524,45 @@ class World:
     def rgb(self) -> np.ndarray:
         """The frame in colour, RGB (height, width, 3): :meth:`image` through the palette."""
         return np.frombuffer(self.ruleset.palette, np.uint8).reshape(256, 3)[self.image()]
+
+    def run(self, frames: int) -> None:
+        """:meth:`step` ``frames`` times."""
+        for _ in range(frames):
+            self.step()
+
+    def paint_shape(self, table: Mapping[str, Any] | None = None, /, **fields: Any) -> int:
+        """Paint a shape written as in a world file's ``[[scene]]``, as a table or as keywords:
+        ``world.paint_shape(shape="circle", element="sand", x=40, y=10, radius=5)``. A picture's
+        ``file`` is taken from the working folder. Returns how many cells were painted;
+        ProblemsError names each mistake in the shape."""
+        from .scene import paint_shape
+
+        return paint_shape(self, {**(table or {}), **fields})
+
+    def save_snapshot(self, path: str | Path) -> None:
+        """Write the whole state to an ``.npz`` file (atomically); see :mod:`sandmod.snapshots`."""
+        from .snapshots import save_snapshot
+
+        save_snapshot(self, Path(path))
+
+    def load_snapshot(self, path: str | Path) -> list[str]:
+        """Take the state, frame and seed from a snapshot this world's size; returns warnings (other mod
+        versions than it was made with); ProblemsError if it does not fit or is not a snapshot."""
+        from .snapshots import load_snapshot
+
+        return load_snapshot(self, Path(path))
+
+    def _repr_png_(self) -> bytes:
+        """The frame as a PNG, each cell a block of pixels: how a notebook shows a world."""
+        import io
+
+        from .recording import write_png
+        from .render import enlarge
+
+        scale = max(1, min(8, 512 // max(self.width, self.height)))
+        out = io.BytesIO()
+        write_png(out, enlarge(self.image(), scale), self.ruleset.palette)
+        return out.getvalue()
 
 _ALL_CHUNKS = np.zeros((0, 0), np.uint16)  # pixels' chunk mask for "every chunk"
 _GLOW_STEP = temperature_units(GLOW_STEP)

@@ -6,8 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sandmod.hooks import hookimpl
-from sandmod.recording import RecorderSpec, VideoSettings
+from sandmod.api import RecorderSpec, VideoSettings, hookimpl
 
 #: Darkest to brightest.
 RAMP = " .:-=+*#%@"

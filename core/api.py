@@ -1,0 +1,33 @@
+"""What a plugin author imports: the hook marker and the types the hooks pass.
+
+::
+
+    from sandmod.api import RecorderSpec, hookimpl
+
+    @hookimpl
+    def register_recorders(register):
+        register(RecorderSpec("count", (".txt",), CountRecorder, "How many frames, as text."))
+
+Everything here is stable; the modules it comes from are not.
+"""
+
+from __future__ import annotations
+
+from .errors import Problem, ProblemsError
+from .hooks import ModLoader, hookimpl
+from .recording import Recorder, RecorderSpec, SavedAtClose, VideoSettings, palette_image, write_png
+from .tomlsource import TomlSource
+
+__all__ = [
+    "ModLoader",
+    "Problem",
+    "ProblemsError",
+    "Recorder",
+    "RecorderSpec",
+    "SavedAtClose",
+    "TomlSource",
+    "VideoSettings",
+    "hookimpl",
+    "palette_image",
+    "write_png",
+]
