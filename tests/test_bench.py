@@ -176,6 +176,7 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
     assert kernelcache.is_compiled()
 
 
+@pytest.mark.slow  # compiles the kernel anew
 def test_the_first_render_of_a_version_says_it_compiles(tmp_path, monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # an empty cache: as on a first run
     monkeypatch.chdir(tmp_path)

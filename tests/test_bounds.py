@@ -11,6 +11,8 @@ mix with the fast ones).
 
 from __future__ import annotations
 
+import pytest
+
 import os
 import subprocess
 import sys
@@ -38,6 +40,7 @@ print("in bounds")
 """
 
 
+@pytest.mark.slow  # compiles the kernel anew
 def test_the_kernel_stays_inside_the_world_with_bounds_checks_on(tmp_path):
     env = os.environ | {"NUMBA_BOUNDSCHECK": "1", "NUMBA_CACHE_DIR": str(tmp_path / "checked")}
     done = subprocess.run([sys.executable, "-c", RUN, str(EXAMPLES)], env=env, capture_output=True, text=True)

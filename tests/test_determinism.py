@@ -57,6 +57,7 @@ def test_hash_spreads_evenly():
     assert counts.min() > 100000 / 16 * 0.9
 
 
+@pytest.mark.slow  # compiles the kernel anew
 def test_compiled_kernels_are_cached_outside_the_package(tmp_path):
     import os
     import subprocess

@@ -26,6 +26,7 @@ def test_totals_line_is_read_in_callgrinds_event_order():
     assert (count.instructions, count.branches, count.mispredicted, count.digest) == (1000, 204, 31, "digest")
 
 
+@pytest.mark.slow  # compiles the kernel anew
 @pytest.mark.skipif(not _can_count(), reason="needs valgrind, a C compiler and valgrind's headers")
 def test_the_same_kernel_counts_the_same_to_the_instruction():
     args = ["--scene", "mix", "--size", "64", "--start", "3", "--frames", "2", "--against", kernel.__file__]

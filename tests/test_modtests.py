@@ -168,6 +168,7 @@ def test_pytest_collects_mod_tests_without_a_conftest(pytester):
     assert "Traceback" not in result.stdout.str() and "def runtest" not in result.stdout.str()
 
 
+@pytest.mark.slow  # compiles the kernel anew
 def test_pytest_compiles_a_new_versions_kernels_before_the_mod_tests_and_says_so(pytester, monkeypatch):
     from sandmod import kernelcache
 
