@@ -396,6 +396,17 @@ def _import_kernel(path) -> ModuleType:
     return module
 
 
+def _use(world: World, kernel, count: int | None) -> None:
+    """Step ``world`` with ``kernel`` on ``count`` threads. A kernel from before :func:`step_at_once`
+    has one ``step``, parallel: numba's thread count is set for it here, or it would run on all of
+    numba's threads whatever ``count`` says (the world sets numba's count only for more than one)."""
+    world.threads, world.kernel = count, kernel
+    if count is not None and not hasattr(kernel, "step_at_once"):
+        import numba
+
+        numba.set_num_threads(max(1, min(count, numba.config.NUMBA_NUM_THREADS)))
+
+
 @dataclass(frozen=True)
 class Comparison(_Result):
     """Two kernels timed on the same frames; the JSON that ``sandmod bench --against`` prints."""
@@ -472,8 +483,7 @@ def compare(
     world = bench.make()
     for kernel, count in zip(kernels, counts):  # compile, or load from the cache, before timing
         start, frame = _saved(world), world.frame
-        world.threads = count
-        world.kernel = kernel
+        _use(world, kernel, count)
         world.step()
         _restore(world, start, frame)
     best = [0.0] * len(kernels)
@@ -487,8 +497,7 @@ def compare(
         for repeat in range(repeats):
             for k in range(len(kernels)) if repeat % 2 == 0 else reversed(range(len(kernels))):
                 _restore(world, starts[k], frame)
-                world.threads = counts[k]
-                world.kernel = kernels[k]
+                _use(world, kernels[k], counts[k])
                 began = time.perf_counter()
                 for _ in range(length):
                     world.step()
