@@ -59,10 +59,13 @@ PARTICLE_ID = "base:particle"
 MAX_BLAST_RADIUS = 32
 
 
+_REQUIREMENT = re.compile(rf"\s*({MOD_NAME})\s*(.*?)\s*")  # a mod's name, then its version range
+
+
 def _requirement(text: str) -> str:
     """A mod's name and an optional version range in the standard (PEP 440) spelling: 'water',
     'water>=2.0,<3', 'water~=2.1', 'water==2.*'."""
-    found = re.fullmatch(rf"\s*({MOD_NAME})\s*(.*?)\s*", text)
+    found = _REQUIREMENT.fullmatch(text)
     if found is None:
         raise ValueError(f"must be a mod name, maybe with versions: 'water' or 'water>=2.0,<3' (got {text!r})")
     try:
@@ -115,7 +118,7 @@ class ModInfo(_Strict):
         """``requires`` parsed: each mod's name and the range of its versions that will do."""
         parsed = []
         for text in self.requires:
-            found = re.fullmatch(rf"\s*({MOD_NAME})\s*(.*?)\s*", text)
+            found = _REQUIREMENT.fullmatch(text)
             parsed.append((found.group(1), SpecifierSet(found.group(2))))
         return parsed
 

@@ -268,13 +268,14 @@ def _check_outputs(inputs, outputs) -> None:
     for path, folder in outputs:
         if path is None:
             continue
+        real = path.resolve()
         try:
             check_output(path, folder=folder)
-            if path.resolve() in seen:
+            if real in seen:
                 raise Refused("is an input of this render or another of its outputs")
         except Refused as exc:
             problems.append(Problem(display_path(path), None, "", f"will not write here: {exc}"))
-        seen.add(path.resolve())
+        seen.add(real)
     if problems:
         raise ProblemsError(problems)
 
