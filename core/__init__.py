@@ -2,12 +2,12 @@
 
 The engine's parts, each a small module:
 
-- :mod:`sandmod.modspec`, :mod:`sandmod.worldspec`: the file formats (pydantic models);
-- :mod:`sandmod.modset`: find, validate and order mods;
-- :mod:`sandmod.compiler`: mods to numpy tables;
-- :mod:`sandmod.world`, :mod:`sandmod.kernel`: the state and the numba step;
+- :mod:`sandmod.formats.modspec`, :mod:`sandmod.formats.worldspec`: the file formats (pydantic models);
+- :mod:`sandmod.rules.modset`: find, validate and order mods;
+- :mod:`sandmod.rules.compiler`: mods to numpy tables;
+- :mod:`sandmod.world.world`, :mod:`sandmod.engine.kernel`: the state and the numba step;
 - :mod:`sandmod.hooks`, :mod:`sandmod.registry`: the plugin API;
-- :mod:`sandmod.loading`, :mod:`sandmod.render`: files in, animations out.
+- :mod:`sandmod.world.loading`, :mod:`sandmod.jobs.render`: files in, animations out.
 
 The public API is what this package gives (plugin authors: :mod:`sandmod.api`)::
 
@@ -33,11 +33,11 @@ import importlib
 __version__ = "0.1.0"
 
 _PUBLIC = {
-    "load_world": "loading",
-    "load_ruleset": "loading",
-    "LoadedWorld": "loading",
-    "World": "world",
-    "Ruleset": "compiler",
+    "load_world": "world.loading",
+    "load_ruleset": "world.loading",
+    "LoadedWorld": "world.loading",
+    "World": "world.world",
+    "Ruleset": "rules.compiler",
     "Problem": "errors",
     "ProblemsError": "errors",
 }

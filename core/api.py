@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from .errors import Problem, ProblemsError
 from .hooks import ModLoader, hookimpl
-from .recording import Recorder, RecorderSpec, SavedAtClose, VideoSettings, palette_image, write_png
-from .tomlsource import TomlSource
+from .formats.recording import Recorder, RecorderSpec, SavedAtClose, VideoSettings, palette_image, write_png
+from .formats.tomlsource import TomlSource
 
 __all__ = [
     "ModLoader",

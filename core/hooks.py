@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import pluggy
 
 if TYPE_CHECKING:
-    from .recording import RecorderSpec
-    from .tomlsource import TomlSource
+    from .formats.recording import RecorderSpec
+    from .formats.tomlsource import TomlSource
 
 PROJECT = "sandmod"
 
@@ -47,7 +47,7 @@ def register_mod_loaders(register: Callable[[str, ModLoader], None]) -> None:
     """Teach sandmod to read mod files of another format.
 
     ``register(suffix, load)``: ``suffix`` like ``".toml"``; ``load(path)``
-    returns a :class:`~sandmod.tomlsource.TomlSource` (the parsed data and
+    returns a :class:`~sandmod.formats.tomlsource.TomlSource` (the parsed data and
     the line of each key) or raises :class:`~sandmod.errors.ProblemsError`.
     """
 
@@ -66,7 +66,7 @@ def register_mods(register: Callable[[Mapping[str, Any], str], None]) -> None:
 def register_recorders(register: Callable[["RecorderSpec"], None]) -> None:
     """Add output formats for ``sandmod render``.
 
-    ``register(spec)`` takes a :class:`~sandmod.recording.RecorderSpec`:
+    ``register(spec)`` takes a :class:`~sandmod.formats.recording.RecorderSpec`:
     a name, the file extensions it writes, and a function that opens a
     recorder on a path.
     """

@@ -17,8 +17,8 @@ import pluggy
 
 from . import hooks
 from .errors import Problem, ProblemsError
-from .recording import RecorderSpec
-from .tomlsource import TomlSource
+from .formats.recording import RecorderSpec
+from .formats.tomlsource import TomlSource
 
 T = TypeVar("T")
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from sandmod.hooks import hookimpl
-from sandmod.recording import RecorderSpec, SavedAtClose
+from sandmod.formats.recording import RecorderSpec, SavedAtClose
 
 
 class ApngRecorder(SavedAtClose):

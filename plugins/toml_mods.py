@@ -6,7 +6,7 @@ from importlib import resources
 from pathlib import Path
 
 from sandmod.hooks import hookimpl
-from sandmod.tomlsource import TomlSource
+from sandmod.formats.tomlsource import TomlSource
 
 
 def bundled_mods_dir() -> Path:

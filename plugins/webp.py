@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from sandmod.hooks import hookimpl
-from sandmod.recording import RecorderSpec, SavedAtClose, VideoSettings
+from sandmod.formats.recording import RecorderSpec, SavedAtClose, VideoSettings
 
 
 class WebpRecorder(SavedAtClose):

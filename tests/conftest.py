@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandmod.compiler import Ruleset
-from sandmod.loading import load_registry, load_ruleset
-from sandmod.world import World
+from sandmod.rules.compiler import Ruleset
+from sandmod.world.loading import load_registry, load_ruleset
+from sandmod.world.world import World
 
 pytest_plugins = ["pytester"]  # to test sandmod's own pytest plugin
 

@@ -60,4 +60,4 @@ def test_the_plugin_api_names_what_it_exports():
     from sandmod import api
 
     assert all(getattr(api, name) is not None for name in api.__all__)
-    assert api.RecorderSpec.__module__ == "sandmod.recording"
+    assert api.RecorderSpec.__module__ == "sandmod.formats.recording"

@@ -9,8 +9,8 @@ import pytest
 from click.testing import CliRunner
 
 from sandmod.errors import ProblemsError
-from sandmod.modset import find_mods
-from sandmod.modtests import TestRunner
+from sandmod.rules.modset import find_mods
+from sandmod.jobs.modtests import TestRunner
 from sandmod.tools.cli import cli
 
 from conftest import write_mods
@@ -114,7 +114,7 @@ def test_requires_with_version_ranges(registry, tmp_path):
 def test_requires_follows_the_version_standard():
     from packaging.specifiers import SpecifierSet
 
-    from sandmod.modspec import ModInfo, version_matches
+    from sandmod.formats.modspec import ModInfo, version_matches
 
     def meets(version: str, wanted: str) -> bool:
         return version_matches(version, SpecifierSet(wanted))

@@ -13,12 +13,14 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from sandmod import benchmark, kernelcache
+from sandmod.jobs import benchmark
+
+from sandmod.engine import kernelcache
 from sandmod.tools.cli import cli
-from sandmod.compiler import BLAST_COLUMNS
-from sandmod import warmup
-from sandmod.warmup import compile_kernels
-from sandmod.world import World
+from sandmod.rules.compiler import BLAST_COLUMNS
+from sandmod.jobs import warmup
+from sandmod.jobs.warmup import compile_kernels
+from sandmod.world.world import World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 KEYS = {
@@ -225,7 +227,7 @@ class _Meddler:
     """A kernel that steps as sandmod's does, then changes one cell from ``frame`` on."""
 
     def __init__(self, frame: int):
-        from sandmod import kernel
+        from sandmod.engine import kernel
 
         self.frame, self.take_detonations, self.explode, self._step = frame, kernel.take_detonations, kernel.explode, kernel.step
 
@@ -237,7 +239,7 @@ class _Meddler:
 
 
 def test_compare_times_kernels_that_step_to_the_same_frames(ruleset):
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     seconds = benchmark.compare(benchmark.scene_bench(ruleset, "everything", 64), 30, 1, [kernel, benchmark.load_kernel(Path(kernel.__file__))], segment=8)
     assert len(seconds) == 2 and min(seconds) > 0
@@ -246,13 +248,13 @@ def test_compare_times_kernels_that_step_to_the_same_frames(ruleset):
 def test_the_kernel_compared_with_its_own_file_is_itself():
     """A second import of kernel.py would write numba's cache files of the first under another module's
     name: after an edit, a later process would load code that names a module it cannot import."""
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     assert benchmark.load_kernel(Path(kernel.__file__)) is kernel
 
 
 def test_compare_finds_the_stretch_where_frames_part(ruleset):
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     with pytest.raises(benchmark.FramesDiffer) as differ:
         benchmark.compare(benchmark.scene_bench(ruleset, "mix", 64), 40, 1, [kernel, _Meddler(frame=17)], segment=8, repeats=2)
@@ -260,7 +262,7 @@ def test_compare_finds_the_stretch_where_frames_part(ruleset):
 
 
 def test_bench_against_another_kernel_file(tmp_path):
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     args = ["bench", "--scene", "halves", "--size", "256", "--steps", "6", "--threads", "1", "--json"]
     result = CliRunner().invoke(cli, [*args, "--against", kernel.__file__], catch_exceptions=False)
@@ -302,7 +304,7 @@ def test_a_kernel_from_before_a_later_argument_of_step_is_handed_those_it_takes(
     marks = np.zeros((3, 4, 32), np.uint16)
     old = benchmark.load_kernel(tmp_path / "kernel.py")
     assert old.step(0, 0, 0, 0, 0, 0, marks[:, :, 0], marks, 0, marks, 0, 2, -1) == (2, (3, 4, 32))
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     assert benchmark.load_kernel(kernel.__file__) is kernel
 
@@ -312,7 +314,7 @@ def test_a_kernel_file_loads_from_numbas_cache_in_a_later_process(tmp_path):
     (tmp_path / "kernel.py").write_text(
         "from numba import njit\n\n\n@njit(cache=True)\ndef step(x):\n    return x + 1\n\n\ntake_detonations = explode = step\n"
     )
-    code = f"from sandmod import benchmark; print(benchmark.load_kernel({str(tmp_path / 'kernel.py')!r}).step(1))"
+    code = f"from sandmod.jobs import benchmark; print(benchmark.load_kernel({str(tmp_path / 'kernel.py')!r}).step(1))"
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     for _ in range(2):  # compiled and cached, then loaded from the cache
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)

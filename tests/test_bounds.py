@@ -22,9 +22,9 @@ EXAMPLES = Path(__file__).parent.parent / "examples"
 
 RUN = """
 import sys
-from sandmod import benchmark
-from sandmod.loading import load_ruleset, load_world
-from sandmod.world import World
+from sandmod.jobs import benchmark
+from sandmod.world.loading import load_ruleset, load_world
+from sandmod.world.world import World
 
 ruleset = load_ruleset()
 for scene, frames in (("everything", 200), ("mix", 60), ("halves", 60)):

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from conftest import as_rows, make_world, run, write_mods
-from sandmod import benchmark
-from sandmod.loading import load_ruleset, load_world
-from sandmod.world import CACHE_LINE, CHUNK, PART, TILE, WAKE_MARGIN, WHOLE, World
+from sandmod.jobs import benchmark
+from sandmod.world.loading import load_ruleset, load_world
+from sandmod.world.world import CACHE_LINE, CHUNK, PART, TILE, WAKE_MARGIN, WHOLE, World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -186,7 +186,7 @@ def test_a_cell_emptied_in_a_full_region_takes_the_water_above_on_that_frame(reg
 def test_frames_are_the_same_on_any_number_of_threads():
     code = """
 import hashlib, sys
-from sandmod.loading import load_world
+from sandmod.world.loading import load_world
 def run(name, frames, threads):
     world = load_world(sys.argv[1] + "/" + name + ".toml").world
     world.threads = threads
@@ -255,7 +255,7 @@ def test_a_chunk_updates_only_the_rows_near_a_change(ruleset):
 
 
 def test_an_explosion_wakes_what_it_reaches(ruleset):
-    from sandmod.modspec import Explosion
+    from sandmod.formats.modspec import Explosion
 
     world = run(layered(ruleset), 5)
     world.explode(50, 45, Explosion(radius=6, strength=2))
@@ -296,7 +296,7 @@ def test_worlds_of_every_size_give_the_kernel_the_same_types(ruleset, size):
 def test_step_calls_the_kernels_with_plain_numbers_not_literal_ones(ruleset):
     """A literal argument (``count = 0`` passed on) makes numba compile the callee again for that
     one value: the cells' update and all it calls, a quarter of a minute more on a first run."""
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     world = World(ruleset, 100, 70)
     step = numba.njit(kernel.step.py_func)  # typed here, so the kernels it calls are looked up (in the cache) again
@@ -309,9 +309,9 @@ def test_a_run_on_one_thread_never_loads_or_starts_the_parallel_kernel():
     code = """
 import sys
 import numba.np.ufunc.parallel as parallel
-from sandmod import kernel
-from sandmod.loading import load_world
-from sandmod.warmup import compile_kernels
+from sandmod.engine import kernel
+from sandmod.world.loading import load_world
+from sandmod.jobs.warmup import compile_kernels
 compile_kernels()
 world = load_world(sys.argv[1] + "/hourglass.toml").world  # one tile a pass: too small for a second thread
 for _ in range(50):
@@ -330,8 +330,8 @@ def test_worker_processes_step_the_same_frames_after_the_parent_started_threads(
     # GNU OpenMP cannot run in a child forked after its threads started: such a child steps on one.
     code = """
 import multiprocessing, sys
-from sandmod import benchmark
-from sandmod.loading import load_ruleset
+from sandmod.jobs import benchmark
+from sandmod.world.loading import load_ruleset
 ruleset = load_ruleset()
 def work(threads):
     world = benchmark.scene_bench(ruleset, "mix", 256).make()

@@ -411,7 +411,7 @@ def test_a_spray_fires_particles_that_land_as_their_element():
         POURING.format(element="water").replace("[[emitters]]", "[[sprays]]\nelement = \"sand\"\nat = [4, 20]\n"
         "radius = 2\ndirection = 45\nspread = 10\nspeed = [2, 3]\nrate = 2\nstop = 10\n\n[[emitters]]")
     )
-    from sandmod.loading import load_world
+    from sandmod.world.loading import load_world
 
     world = load_world("spray.toml").world
     world.step()

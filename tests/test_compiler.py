@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import write_mods
-from sandmod.compiler import (
+from sandmod.rules.compiler import (
     ARCHETYPE_CODES,
     BLAST_RADIUS,
     CAP_ONE,
@@ -19,8 +19,8 @@ from sandmod.compiler import (
     TEMP_ONE,
 )
 from sandmod.errors import ProblemsError
-from sandmod.hashing import ROLL_ONE
-from sandmod.loading import load_ruleset
+from sandmod.engine.hashing import ROLL_ONE
+from sandmod.world.loading import load_ruleset
 
 
 @pytest.fixture(autouse=True)

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandmod import hashing
-from sandmod.loading import load_world
+from sandmod.engine import hashing
+from sandmod.world.loading import load_world
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
@@ -39,7 +39,7 @@ def test_another_seed_gives_other_frames():
 
 
 def test_hash_is_the_same_in_python_numpy_and_numba():
-    from sandmod.kernel import _mix32
+    from sandmod.engine.kernel import _mix32
 
     values = [0, 1, 2, 12345, 0xFFFFFFFF, 0x9E3779B9, 2**31]
     python = [hashing.mix32(v) for v in values]
@@ -67,7 +67,7 @@ def test_compiled_kernels_are_cached_outside_the_package(tmp_path):
 
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"} | {"XDG_CACHE_HOME": str(tmp_path)}
     code = (
-        "from sandmod.loading import load_world; import sys;"
+        "from sandmod.world.loading import load_world; import sys;"
         f"w = load_world({str(EXAMPLES / 'hourglass.toml')!r}).world; w.step()"
     )
     subprocess.run([sys.executable, "-c", code], check=True, env=env)

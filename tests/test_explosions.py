@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from conftest import make_world
-from sandmod.modspec import Explosion
-from sandmod.world import SCORCHED
+from sandmod.formats.modspec import Explosion
+from sandmod.world.world import SCORCHED
 
 
 def field(ruleset, char="#", size=61):
@@ -91,7 +91,7 @@ def test_a_heap_of_gunpowder_goes_off_in_a_chain(ruleset):
 
 
 def test_world_files_schedule_explosions(tmp_path):
-    from sandmod.loading import load_world
+    from sandmod.world.loading import load_world
 
     path = tmp_path / "w.toml"
     path.write_text(

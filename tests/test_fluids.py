@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from conftest import make_world, run, write_mods
-from sandmod.loading import load_ruleset, load_world
-from sandmod.world import World
+from sandmod.world.loading import load_ruleset, load_world
+from sandmod.world.world import World
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

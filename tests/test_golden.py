@@ -12,8 +12,8 @@ from __future__ import annotations
 import pytest
 
 from conftest import run
-from sandmod import benchmark
-from sandmod.world import World
+from sandmod.jobs import benchmark
+from sandmod.world.world import World
 from test_chunks import digest
 
 #: (scene, side of the world): digest after 160 frames. The larger world has more cells than
@@ -32,7 +32,7 @@ GOLDEN = {
 
 
 def test_one_world_is_too_large_for_the_cache():
-    from sandmod.kernel import CACHED_CELLS
+    from sandmod.engine.kernel import CACHED_CELLS
 
     assert 96 * 96 <= CACHED_CELLS < 272 * 272
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import LEGEND, as_rows, make_world, run, write_mods
-from sandmod.compiler import TEMP_ONE
-from sandmod.loading import load_ruleset
-from sandmod.world import World
+from sandmod.rules.compiler import TEMP_ONE
+from sandmod.world.loading import load_ruleset
+from sandmod.world.world import World
 
 
 def conduct_reference(cells, heat, t, frame):
@@ -56,7 +56,7 @@ def static_world(ruleset, seed, size=(12, 16)):
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_conduction_matches_the_slow_reference(ruleset, seed):
-    from sandmod.kernel import conduct
+    from sandmod.engine.kernel import conduct
 
     world = static_world(ruleset, seed)
     s, t = world.state, world.tables

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from sandmod import kernel
+from sandmod.engine import kernel
 from sandmod.tools import instructions
 
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import pytest
 
 from sandmod.errors import ProblemsError
-from sandmod.modspec import LiquidElement, ModFile
+from sandmod.formats.modspec import LiquidElement, ModFile
 from sandmod.plugins.toml_mods import bundled_mods_dir
-from sandmod.tomlsource import TomlSource
-from sandmod.validation import validate
+from sandmod.formats.tomlsource import TomlSource
+from sandmod.formats.validation import validate
 
 
 def check(text: str) -> list[str]:
@@ -142,8 +142,8 @@ def test_invalid_toml_names_its_line():
 def test_the_archetypes_are_one_list():
     import typing
 
-    from sandmod import modspec
-    from sandmod.layout import ARCHETYPES
+    from sandmod.formats import modspec
+    from sandmod.engine.layout import ARCHETYPES
 
     members = typing.get_args(typing.get_args(modspec.Element)[0])
     assert tuple(typing.get_args(m.model_fields["archetype"].annotation)[0] for m in members) == ARCHETYPES

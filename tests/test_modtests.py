@@ -8,8 +8,8 @@ import pytest
 from click.testing import CliRunner
 
 from sandmod.errors import ProblemsError
-from sandmod.modset import find_mods
-from sandmod.modtests import TestRunner
+from sandmod.rules.modset import find_mods
+from sandmod.jobs.modtests import TestRunner
 from sandmod.tools.cli import cli
 
 from conftest import write_mods
@@ -94,9 +94,9 @@ def test_bundled_tests_can_fail(registry, tmp_path):
     """Titanium that acid may eat fails the acid test: the tests check what they say."""
     import dataclasses
 
-    from sandmod.modspec import ModFile
-    from sandmod.tomlsource import TomlSource
-    from sandmod.validation import validate
+    from sandmod.formats.modspec import ModFile
+    from sandmod.formats.tomlsource import TomlSource
+    from sandmod.formats.validation import validate
 
     modset = find_mods(registry)
     titanium = modset.mods["titanium"]
@@ -170,7 +170,7 @@ def test_pytest_collects_mod_tests_without_a_conftest(pytester):
 
 @pytest.mark.slow  # compiles the kernel anew
 def test_pytest_compiles_a_new_versions_kernels_before_the_mod_tests_and_says_so(pytester, monkeypatch):
-    from sandmod import kernelcache
+    from sandmod.engine import kernelcache
 
     pytester.makefile(".toml", **{"mods/fizz": textwrap.dedent(FIZZ)})
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(pytester.path / "cache"))  # no stamp there: as on a first run

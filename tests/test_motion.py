@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from conftest import write_mods
-from sandmod.kernel import LOOSE, _line_point
-from sandmod.loading import load_ruleset
-from sandmod.shapes import fill_mask
-from sandmod.traversal import line_cells
-from sandmod.world import Emitter, World
+from sandmod.engine.kernel import LOOSE, _line_point
+from sandmod.world.loading import load_ruleset
+from sandmod.world.shapes import fill_mask
+from sandmod.engine.traversal import line_cells
+from sandmod.world.world import Emitter, World
 
 
 def floor(world: World, rows: int = 2) -> None:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sandmod.hashing import SALT_SPRAY
-from sandmod.world import World
+from sandmod.engine.hashing import SALT_SPRAY
+from sandmod.world.world import World
 from test_chunks import digest
 
 

@@ -9,8 +9,8 @@ import pytest
 from PIL import Image
 
 from sandmod.errors import ProblemsError
-from sandmod.loading import load_world
-from sandmod.pictures import fit
+from sandmod.world.loading import load_world
+from sandmod.formats.pictures import fit
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

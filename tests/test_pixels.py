@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sandmod import benchmark
-from sandmod.loading import load_world
-from sandmod.world import World
+from sandmod.jobs import benchmark
+from sandmod.world.loading import load_world
+from sandmod.world.world import World
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "examples" / "plugin-package"
 
 PROBE = """
-from sandmod.loading import load_registry
+from sandmod.world.loading import load_registry
 registry = load_registry()
 print(sorted(registry.recorders), sorted(e.plugin for e in registry.mod_dirs))
 """

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from sandmod import hooks
-from sandmod.compiler import compile_mods
+from sandmod.rules.compiler import compile_mods
 from sandmod.errors import ProblemsError
-from sandmod.modset import find_mods
-from sandmod.recording import RecorderSpec, VideoSettings
+from sandmod.rules.modset import find_mods
+from sandmod.formats.recording import RecorderSpec, VideoSettings
 from sandmod.registry import BUILTIN_PLUGINS, collect, make_plugin_manager
-from sandmod.render import render
-from sandmod.world import World
+from sandmod.jobs.render import render
+from sandmod.world.world import World
 
 
 class FramesInMemory:

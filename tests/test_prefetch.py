@@ -7,7 +7,7 @@ import pytest
 from numba import njit
 from numba.core.errors import TypingError
 
-from sandmod.prefetch import prefetch
+from sandmod.engine.prefetch import prefetch
 
 
 @njit

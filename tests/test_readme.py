@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from sandmod.loading import load_ruleset, load_world
+from sandmod.world.loading import load_ruleset, load_world
 
 ROOT = Path(__file__).parent.parent
 README = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -33,8 +33,8 @@ def test_the_readme_mod_and_world_load_and_render_a_frame(tmp_path):
 
 
 def test_the_readme_mod_test_passes(registry, tmp_path):
-    from sandmod.modset import find_mods
-    from sandmod.modtests import TestRunner
+    from sandmod.rules.modset import find_mods
+    from sandmod.jobs.modtests import TestRunner
 
     test = next(b for b in toml_blocks() if "[[tests]]" in b)
     (tmp_path / "mods").mkdir()

@@ -9,10 +9,11 @@ import pytest
 from PIL import Image, ImageSequence
 
 from conftest import invoke
-from sandmod.loading import load_registry
-from sandmod.recording import VideoSettings
-from sandmod.render import Crop, Framing, enlarge, render
-from sandmod.world import SCORCHED, World
+from sandmod.world.loading import load_registry
+from sandmod.formats.recording import VideoSettings
+from sandmod.jobs.render import Crop, Framing, render
+from sandmod.world.world import enlarge
+from sandmod.world.world import SCORCHED, World
 
 REGISTRY = load_registry()
 
@@ -23,7 +24,7 @@ def pouring_world(ruleset) -> World:
     floor = np.zeros((16, 24), bool)
     floor[14:, :] = True
     world.paint(floor, ruleset.index("stone"))
-    from sandmod.world import Emitter
+    from sandmod.world.world import Emitter
 
     world.emitters.append(Emitter(np.array([0, 0]), np.array([11, 12]), ruleset.index("sand"), 0, None, 1.0))
     return world
@@ -47,7 +48,7 @@ class Keep:
 
 
 def expected_frames(ruleset, framing: Framing, frames: int, every: int, tmp_path: Path) -> list[np.ndarray]:
-    from sandmod.recording import RecorderSpec
+    from sandmod.formats.recording import RecorderSpec
 
     render(pouring_world(ruleset), RecorderSpec("keep", (".keep",), Keep), tmp_path / "x.keep", frames=frames, every=every, framing=framing)
     return Keep.frames
@@ -227,7 +228,7 @@ def test_cli_crop_loop_still_and_summary(tmp_path, monkeypatch):
 
 
 def test_the_palette_card_shows_every_element_in_its_colours(tmp_path, monkeypatch, ruleset):
-    from sandmod.swatches import ROW, SWATCH, card_layout
+    from sandmod.jobs.swatches import ROW, SWATCH, card_layout
 
     monkeypatch.chdir(tmp_path)
     result = invoke("palette", "-o", "card.png")

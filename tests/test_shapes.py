@@ -9,8 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from sandmod.shapes import brush_offsets, circle_mask, fill_mask, line_mask, rect_mask
-from sandmod.traversal import line_cells
+from sandmod.world.shapes import brush_offsets, circle_mask, fill_mask, line_mask, rect_mask
+from sandmod.engine.traversal import line_cells
 
 
 def reference_line(x0, y0, x1, y1):

@@ -10,9 +10,9 @@ from PIL import Image
 
 from conftest import invoke
 from sandmod.errors import ProblemsError
-from sandmod.loading import load_ruleset, load_world
-from sandmod.snapshots import load_snapshot, save_snapshot
-from sandmod.world import State, World
+from sandmod.world.loading import load_ruleset, load_world
+from sandmod.world.snapshots import load_snapshot, save_snapshot
+from sandmod.world.world import State, World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

@@ -15,7 +15,7 @@ import pytest
 from PIL import Image
 
 from conftest import invoke
-from sandmod.limits import BASELINE_BYTES, WORLD_BYTES_PER_CELL
+from sandmod.formats.limits import BASELINE_BYTES, WORLD_BYTES_PER_CELL
 
 SMALL = """
 [world]
@@ -189,7 +189,7 @@ def test_a_picture_with_more_pixels_than_the_limit_allows_is_refused_from_its_he
 
 
 def test_timeline_paintings_keep_only_their_own_box():
-    from sandmod.loading import load_world
+    from sandmod.world.loading import load_world
 
     events = "".join(
         f'\n[[timeline]]\nframe = {i}\npaint = {{ shape = "rect", element = "sand", x = {i % 1000}, y = 10, width = 3, height = 3 }}\n'
@@ -250,7 +250,7 @@ def test_an_unwritable_snapshot_leaves_no_animation_and_a_failed_still_is_named(
 
 
 def test_a_folder_output_is_not_replaced_when_a_file_was_added_to_it_meanwhile():
-    from sandmod.recording import atomic_folder
+    from sandmod.formats.recording import atomic_folder
 
     Path("frames").mkdir()
     Path("frames/frame_00000.png").write_bytes(b"old")

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from sandmod.errors import ProblemsError
-from sandmod.loading import load_world
-from sandmod.traversal import line_cells
+from sandmod.world.loading import load_world
+from sandmod.engine.traversal import line_cells
 
 HEAD = """
 [world]
@@ -224,7 +224,7 @@ erase = { shape = "circle", element = "sand", x = 5, y = 5, radius = 2 }
 
 
 def test_load_world_finds_mods_as_the_command_line_does(tmp_path, monkeypatch):
-    from sandmod.loading import load_world
+    from sandmod.world.loading import load_world
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "mods").mkdir()

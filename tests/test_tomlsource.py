@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sandmod.tomlsource import TomlSource, index_lines
+from sandmod.formats.tomlsource import TomlSource, index_lines
 
 TEXT = '''\
 # a comment

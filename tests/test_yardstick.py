@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from sandmod import benchmark, yardstick
-from sandmod.hashing import SALT_MOVE, cell_hash, frame_key
+from sandmod.jobs import benchmark, yardstick
+from sandmod.engine.hashing import SALT_MOVE, cell_hash, frame_key
 from sandmod.tools.cli import cli
 
 SAND, WATER, STONE = 1, 2, 3

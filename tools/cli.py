@@ -12,9 +12,9 @@ import click
 
 from sandmod import __version__
 from sandmod.errors import Problem, ProblemsError, display_path, printable
-from sandmod.modspec import ARCHETYPES, MOD_NAME, NAME
-from sandmod.recording import WriteError
-from sandmod.userfiles import Refused, check_output, inside
+from sandmod.formats.modspec import ARCHETYPES, MOD_NAME, NAME
+from sandmod.formats.recording import WriteError
+from sandmod.formats.userfiles import Refused, check_output, inside
 
 EXIT_USER_ERROR = 2
 
@@ -44,7 +44,7 @@ def _counted(count: int, noun: str) -> str:
 
 def _mod_folders(mod_dirs) -> list[Path]:
     """./mods when there is one, then every --mods DIR (a world's own mods/ beside it comes first: see load_world)."""
-    from sandmod.loading import mod_folders
+    from sandmod.world.loading import mod_folders
 
     return mod_folders(mod_dirs)
 
@@ -82,7 +82,7 @@ class MemorySize(click.ParamType):
     def convert(self, value, param, ctx):
         if value is None or isinstance(value, int) or str(value).lower() == "none":
             return None if value is None or str(value).lower() == "none" else value
-        from sandmod.limits import parse_size
+        from sandmod.formats.limits import parse_size
 
         try:
             return parse_size(str(value))
@@ -98,7 +98,7 @@ def _images(result) -> str:
 
 def _named(count: int | None) -> int | str:
     """A thread count as results show it: the number, or auto."""
-    from sandmod.benchmark import AUTO
+    from sandmod.jobs.benchmark import AUTO
 
     return AUTO if count is None else count
 
@@ -150,18 +150,18 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     """
     if threads is not None:
         _thread_pool(threads)
-    from sandmod.loading import load_world
-    from sandmod.recording import output_bytes
-    from sandmod.render import Framing, render_problems
-    from sandmod.render import render as run
-    from sandmod.snapshots import write_snapshot
-    from sandmod.warmup import compile_new_kernels, compile_parallel
+    from sandmod.world.loading import load_world
+    from sandmod.formats.recording import output_bytes
+    from sandmod.jobs.render import Framing, render_problems
+    from sandmod.jobs.render import render as run
+    from sandmod.world.snapshots import write_snapshot
+    from sandmod.jobs.warmup import compile_new_kernels, compile_parallel
 
     loaded = load_world(world, mod_dirs=_mod_folders(mod_dirs), seed=seed, max_memory=max_memory)
     loaded.world.threads = threads
     warnings = [str(w) for w in loaded.warnings]
     if from_snapshot is not None:
-        from sandmod.snapshots import load_snapshot
+        from sandmod.world.snapshots import load_snapshot
 
         warnings += [f"{display_path(from_snapshot)}: {w}" for w in load_snapshot(loaded.world, from_snapshot)]
         if seed is not None:
@@ -207,7 +207,7 @@ def _thread_pool(most: int) -> None:
     imported, so a larger one than the CPUs is asked for first; one sized already is a usage error."""
     import os
 
-    from sandmod.benchmark import max_threads
+    from sandmod.jobs.benchmark import max_threads
 
     if most > max_threads() and "numba" not in sys.modules:
         os.environ["NUMBA_NUM_THREADS"] = str(most)  # read when numba is imported, just below
@@ -282,7 +282,7 @@ def _check_outputs(inputs, outputs) -> None:
 
 def _crop(loaded, crop: tuple[int, int, int, int] | None):
     """The crop region from --crop or the world's render.crop, checked against the world."""
-    from sandmod.render import Crop
+    from sandmod.jobs.render import Crop
 
     given = crop or loaded.spec.render.crop
     if given is None:
@@ -302,7 +302,7 @@ def _crop(loaded, crop: tuple[int, int, int, int] | None):
 @_mods_option
 def list_(as_json, provenance, mod_dirs) -> None:
     """List the elements and reactions of every mod found (the bundled ones, ./mods, --mods)."""
-    from sandmod.loading import load_ruleset
+    from sandmod.world.loading import load_ruleset
 
     ruleset = load_ruleset(None, _mod_folders(mod_dirs))
     if provenance and not as_json:
@@ -377,10 +377,10 @@ def validate(paths, max_memory, mod_dirs) -> None:
 
     With no PATHS, checks every mod found (the bundled ones and ./mods).
     """
-    from sandmod.checking import check
-    from sandmod.loading import load_registry
-    from sandmod.modset import is_world
-    from sandmod.tomlsource import TomlSource
+    from sandmod.jobs.checking import check
+    from sandmod.world.loading import load_registry
+    from sandmod.rules.modset import is_world
+    from sandmod.formats.tomlsource import TomlSource
 
     problems: list[Problem] = []
     folders, mod_files, worlds = list(mod_dirs), [], []
@@ -415,8 +415,8 @@ def validate(paths, max_memory, mod_dirs) -> None:
 
 def _world_files(folder: Path) -> list[Path]:
     """The world files in a folder (those that do not read are reported with its mods)."""
-    from sandmod.modset import is_world
-    from sandmod.tomlsource import TomlSource
+    from sandmod.rules.modset import is_world
+    from sandmod.formats.tomlsource import TomlSource
 
     found = []
     for path in sorted(folder.glob("*.toml")):
@@ -430,7 +430,7 @@ def _world_files(folder: Path) -> list[Path]:
 
 def _write_new(path: Path, text: str, *, replace: bool = False) -> None:
     """Write ``text`` to ``path`` in one go; an existing file is an error unless ``replace``."""
-    from sandmod.recording import atomic_path
+    from sandmod.formats.recording import atomic_path
 
     if path.exists() and not replace:
         raise ProblemsError([Problem(display_path(path), None, "", "already exists; not overwriting it")])
@@ -458,7 +458,7 @@ def _like(ref: str | None, mod_dirs):
     """The spec of the element named by --like, from every mod found."""
     if ref is None:
         return None
-    from sandmod.loading import load_ruleset
+    from sandmod.world.loading import load_ruleset
 
     ruleset = load_ruleset(None, _mod_folders(mod_dirs))
     try:
@@ -484,7 +484,7 @@ _ARCHETYPES = tuple(name for name in ARCHETYPES if name != "empty")  # what a ne
 @_mods_option
 def new_mod(name, archetype, like, folder, mod_dirs) -> None:
     """Write DIR/NAME.toml: a mod with one element called NAME (with _ for -) and a test of it."""
-    from sandmod import scaffold
+    from sandmod.jobs import scaffold
 
     spec = _like(like, mod_dirs)
     archetype = archetype or (spec.archetype if spec is not None else "powder")
@@ -504,8 +504,8 @@ def new_mod(name, archetype, like, folder, mod_dirs) -> None:
 @_mods_option
 def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
     """Write a new element NAME (with a test): into --mod FILE, or as a new mod DIR/NAME.toml."""
-    from sandmod import scaffold
-    from sandmod.tomlsource import TomlSource
+    from sandmod.jobs import scaffold
+    from sandmod.formats.tomlsource import TomlSource
 
     spec = _like(like, mod_dirs)
     archetype = archetype or (spec.archetype if spec is not None else "powder")
@@ -529,10 +529,10 @@ def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
 @_mods_option
 def new_world(name, mods, pour, size, mod_dirs) -> None:
     """Write NAME.toml: a world with a floor and an emitter, recording the mods and versions it is made with."""
-    from sandmod import scaffold
-    from sandmod.loading import load_registry
-    from sandmod.modset import find_mods
-    from sandmod.compiler import compile_mods
+    from sandmod.jobs import scaffold
+    from sandmod.world.loading import load_registry
+    from sandmod.rules.modset import find_mods
+    from sandmod.rules.compiler import compile_mods
 
     modset = find_mods(load_registry(), _mod_folders(mod_dirs))
     unknown = [name for name in mods if name not in modset.mods]
@@ -563,15 +563,15 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
 @_mods_option
 def palette(world, output, mod_dirs) -> None:
     """Write a PNG swatch card of every element's colours (of WORLD's mods, or of every mod found)."""
-    from sandmod.recording import atomic_path
-    from sandmod.swatches import swatch_card
+    from sandmod.formats.recording import atomic_path
+    from sandmod.jobs.swatches import swatch_card
 
     if world is not None:
-        from sandmod.loading import load_world
+        from sandmod.world.loading import load_world
 
         ruleset = load_world(world, mod_dirs=_mod_folders(mod_dirs)).ruleset
     else:
-        from sandmod.loading import load_ruleset
+        from sandmod.world.loading import load_ruleset
 
         ruleset = load_ruleset(None, _mod_folders(mod_dirs))
     with _writing(output), atomic_path(output) as tmp:
@@ -590,9 +590,9 @@ def schema(world, output) -> None:
       #:schema ./mod.schema.json
     """
     if world:
-        from sandmod.worldspec import WorldFile as model
+        from sandmod.formats.worldspec import WorldFile as model
     else:
-        from sandmod.modspec import ModFile as model
+        from sandmod.formats.modspec import ModFile as model
     document = {"$schema": "https://json-schema.org/draft/2020-12/schema", **model.model_json_schema()}
     document["title"] = "sandmod world file" if world else "sandmod mod file"
     text = json.dumps(document, indent=2) + "\n"
@@ -612,10 +612,10 @@ def test_(mods, mod_dirs) -> None:
     plugins' folders, ./mods and every --mods DIR. Exit status: 0 when every
     test passed, 1 when one failed, 2 when a file has a mistake.
     """
-    from sandmod.loading import load_registry
-    from sandmod.modset import discover_mods
-    from sandmod.modtests import TestRunner
-    from sandmod.warmup import compile_new_kernels
+    from sandmod.world.loading import load_registry
+    from sandmod.rules.modset import discover_mods
+    from sandmod.jobs.modtests import TestRunner
+    from sandmod.jobs.warmup import compile_new_kernels
 
     folders = _mod_folders(mod_dirs)
     modset, problems = discover_mods(load_registry(), folders)
@@ -723,8 +723,9 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
     at the time, the kernel's speed as a share of it, and what more
     threads give each of them. It runs on the scenes only.
     """
-    from sandmod import benchmark, kernelcache
+    from sandmod.jobs import benchmark
 
+    from sandmod.engine import kernelcache
     if memory_sizes:
         for side in memory_sizes:
             found = benchmark.render_peak_memory(side)
@@ -747,8 +748,8 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
         raise click.UsageError("--yardstick runs on the built-in scenes (its rules know sand and water only), not on a --world")
     thread_counts = thread_counts or (None,)
     _thread_pool(max((c for c in thread_counts if c is not None), default=1))
-    from sandmod.loading import load_ruleset
-    from sandmod.warmup import compile_kernels, compile_parallel
+    from sandmod.world.loading import load_ruleset
+    from sandmod.jobs.warmup import compile_kernels, compile_parallel
 
     benches = []
     for path in worlds:  # every file checked before anything is timed
@@ -779,7 +780,7 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
 
 
 def _bench_runs(runs, thread_counts, as_json, formats, against, own_frames, in_turns, yardstick, no_sleep, compile_seconds) -> None:
-    from sandmod import benchmark
+    from sandmod.jobs import benchmark
 
     if formats:
         _bench_recording(formats, runs, thread_counts, as_json)
@@ -823,8 +824,10 @@ def _report(result, as_json: bool, line: str) -> None:
 def _bench_against(path, runs, thread_counts, as_json, own_frames: bool) -> None:
     from numba.core.errors import NumbaError
 
-    from sandmod import benchmark, kernel
+    from sandmod.jobs import benchmark
 
+
+    from sandmod.engine import kernel
     try:
         other = benchmark.load_kernel(path)
     except ValueError as error:
@@ -853,8 +856,9 @@ def _bench_against(path, runs, thread_counts, as_json, own_frames: bool) -> None
 
 
 def _bench_in_turns(runs, thread_counts, as_json) -> None:
-    from sandmod import benchmark, kernel
+    from sandmod.jobs import benchmark
 
+    from sandmod.engine import kernel
     for b, steps in runs:
         cells = b.width * b.height * steps / 1e6
         try:
@@ -875,7 +879,7 @@ def _bench_in_turns(runs, thread_counts, as_json) -> None:
 
 
 def _bench_yardstick(runs, thread_counts, as_json) -> None:
-    from sandmod import benchmark
+    from sandmod.jobs import benchmark
 
     for b, steps in runs:
         cells = b.width * b.height * steps / 1e6
@@ -905,8 +909,8 @@ def _bench_yardstick(runs, thread_counts, as_json) -> None:
 def _bench_recording(formats, runs, thread_counts, as_json) -> None:
     import tempfile
 
-    from sandmod import benchmark
-    from sandmod.loading import load_registry
+    from sandmod.jobs import benchmark
+    from sandmod.world.loading import load_registry
 
     registry = load_registry()
     unknown = [name for name in formats if name not in registry.recorders]

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import click
 
-from sandmod import benchmark  # numpy, not numba
+from sandmod.jobs import benchmark  # numpy, not numba
 
 #: The two calls, through valgrind's client requests (no-ops when not under valgrind).
 _SWITCH_C = """
@@ -83,7 +83,7 @@ class CannotCount(Exception):
 
 def _cache_dir() -> Path:
     """Where the kernels compiled for counting are kept: one folder, this version's only."""
-    from sandmod.kernelcache import _versions, version_hash
+    from sandmod.engine.kernelcache import _versions, version_hash
 
     folder = _versions().parent / "numba-counting"
     if folder.is_dir():
@@ -156,7 +156,7 @@ def _child(job: dict) -> None:
 
     import numba
 
-    from sandmod.loading import load_ruleset
+    from sandmod.world.loading import load_ruleset
 
     numba.set_num_threads(1)
     if job["world"]:

@@ -37,7 +37,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from sandmod import benchmark  # numpy, not numba
+from sandmod.jobs import benchmark  # numpy, not numba
 from sandmod.tools.instructions import last_line
 
 #: The kernel functions worth counting (the ones a frame spends its time in).
@@ -61,7 +61,7 @@ def _restore(world, path: Path) -> None:
 
 
 def _make(job: dict):
-    from sandmod.loading import load_ruleset
+    from sandmod.world.loading import load_ruleset
 
     if job["world"]:
         bench, _ = benchmark.world_bench(Path(job["world"]))
@@ -79,7 +79,7 @@ def _as_python(kernel) -> None:
 
 def _child(job: dict) -> None:
     """Without numba: step the frames from the saved state under a line tracer; write the counts and digest."""
-    from sandmod import kernel
+    from sandmod.engine import kernel
 
     _as_python(kernel)
     world = _make(job)
@@ -137,7 +137,7 @@ def main(scene, world, size, start, frames, function, first, least, child) -> No
     if child:
         _child(json.loads(Path(child).read_text(encoding="utf-8")))
         return
-    from sandmod import kernel
+    from sandmod.engine import kernel
     from sandmod.errors import ProblemsError
 
     job = dict(scene=scene, world=world, size=size, frames=frames, function=function)

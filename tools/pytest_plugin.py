@@ -33,7 +33,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     """Compile a new version's kernels before the first mod test, saying so, rather than stall in it."""
     if not any(isinstance(item, ModTestItem) for item in session.items):
         return
-    from sandmod.warmup import compile_new_kernels
+    from sandmod.jobs.warmup import compile_new_kernels
 
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
     compile_new_kernels(announce=None if reporter is None else lambda notice: reporter.write_line(f"sandmod: {notice}"))
@@ -44,7 +44,7 @@ def _looks_like_mod(path: Path) -> bool:
     parse is collected too, so that its problems fail the run instead of passing unseen."""
     import tomllib
 
-    from sandmod.modset import is_world
+    from sandmod.rules.modset import is_world
 
     try:
         return not is_world(tomllib.loads(path.read_text(encoding="utf-8")))
@@ -54,9 +54,9 @@ def _looks_like_mod(path: Path) -> bool:
 
 def _runner_for(config: pytest.Config, folder: Path):
     """A test runner over the bundled mods, the plugins' mods and ``folder``, made once per folder."""
-    from sandmod.loading import load_registry
-    from sandmod.modset import discover_mods
-    from sandmod.modtests import TestRunner
+    from sandmod.world.loading import load_registry
+    from sandmod.rules.modset import discover_mods
+    from sandmod.jobs.modtests import TestRunner
 
     runners = config.stash[_runners]
     if folder not in runners:
@@ -71,7 +71,7 @@ class ModTestFile(pytest.File):
 
     def collect(self):
         from sandmod.errors import display_path
-        from sandmod.modtests import TestCase
+        from sandmod.jobs.modtests import TestCase
 
         runner, problems = _runner_for(self.config, self.path.parent)
         shown = display_path(self.path)

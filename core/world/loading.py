@@ -2,7 +2,7 @@
 
 These are the functions the CLI (and a Python user) calls::
 
-    from sandmod.loading import load_world
+    from sandmod.world.loading import load_world
     loaded = load_world("examples/hourglass.toml")
     for _ in range(100):
         loaded.world.step()
@@ -16,15 +16,15 @@ from typing import Iterable, Sequence
 
 import pluggy
 
-from .compiler import Ruleset, compile_mods
-from .errors import Problem
-from .limits import DEFAULT_MAX_MEMORY, MemoryBudget
-from .modset import ModSet, find_mods
-from .registry import Registry, collect, make_plugin_manager
-from .tomlsource import TomlSource
-from .validation import validate
+from ..rules.compiler import Ruleset, compile_mods
+from ..errors import Problem
+from ..formats.limits import DEFAULT_MAX_MEMORY, MemoryBudget
+from ..rules.modset import ModSet, find_mods
+from ..registry import Registry, collect, make_plugin_manager
+from ..formats.tomlsource import TomlSource
+from ..formats.validation import validate
 from .world import World
-from .worldspec import WorldFile
+from ..formats.worldspec import WorldFile
 
 
 def load_registry(pm: pluggy.PluginManager | None = None) -> Registry:
@@ -57,7 +57,7 @@ class LoadedWorld:
     @property
     def inputs(self) -> list[Path]:
         """The files the world is made from: the world file and its pictures."""
-        from .worldspec import Picture
+        from ..formats.worldspec import Picture
 
         shapes = [*self.spec.scene, *(event.paint for event in self.spec.timeline if event.paint is not None)]
         folder = self.source.folder or Path(".")
@@ -77,7 +77,7 @@ def mod_folders(extra: Iterable[Path] = (), world: Path | None = None) -> list[P
 
 def read_world_spec(path: str | Path) -> tuple[WorldFile, TomlSource]:
     """Read and validate a world file (no mods needed)."""
-    from .errors import ProblemsError
+    from ..errors import ProblemsError
 
     source = TomlSource.read(path)
     if "mod" in source.data and "world" not in source.data:
@@ -133,7 +133,7 @@ def mod_warnings(spec: WorldFile, source: TomlSource, ruleset: Ruleset) -> list[
 
 
 def _select_for_world(modset: ModSet, spec: WorldFile, source: TomlSource):
-    from .errors import ProblemsError
+    from ..errors import ProblemsError
 
     names = spec.world.mods
     if names is not None:

@@ -14,13 +14,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
 
-from .errors import Problem, ProblemsError, display_path
+from ..errors import Problem, ProblemsError, display_path
 from pydantic import ValidationError
 
-from .modspec import ModFile, ModInfo, version_matches
-from .registry import Registry
-from .tomlsource import TomlSource
-from .validation import validate
+from ..formats.modspec import ModFile, ModInfo, version_matches
+from ..registry import Registry
+from ..formats.tomlsource import TomlSource
+from ..formats.validation import validate
 
 #: The mod every world loads: it defines ``empty`` and ``stone``.
 BASE_MOD = "base"

@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable
 
-from .errors import Problem, ProblemsError
-from .limits import DEFAULT_MAX_MEMORY
-from .registry import Registry
+from ..errors import Problem, ProblemsError
+from ..formats.limits import DEFAULT_MAX_MEMORY
+from ..registry import Registry
 
 
 @dataclass
@@ -39,9 +39,9 @@ def check(
 ) -> Report:
     """Check the mods in ``folders`` and ``mod_files`` (with the plugins' mods), and the ``worlds``
     (each with the mods beside it and in ``world_mod_dirs``)."""
-    from .compiler import compile_mods
-    from .loading import load_world
-    from .modset import discover_mods
+    from ..rules.compiler import compile_mods
+    from ..world.loading import load_world
+    from ..rules.modset import discover_mods
     from .modtests import TestRunner
 
     folders = list(folders)

@@ -18,7 +18,7 @@ thread they wait for; so unless you set ``OMP_WAIT_POLICY`` or
 ``tbb``). GNU OpenMP cannot run in a process forked after it started: such
 a child steps its worlds on one thread.
 
-Import this module before numba (``sandmod.kernel`` does): the settings are
+Import this module before numba (``sandmod.engine.kernel`` does): the settings are
 read when numba and OpenMP start.
 """
 

@@ -3,7 +3,7 @@ units, archetype codes and the encodings of the compiled tables.
 
 Only the kernel's own sources (this module, ``kernel.py``, ``hashing.py``,
 ``traversal.py``, ``prefetch.py``) name the compiled kernels' cache folder
-(:mod:`sandmod.kernelcache`): an edit anywhere else never compiles them anew.
+(:mod:`sandmod.engine.kernelcache`): an edit anywhere else never compiles them anew.
 """
 
 from __future__ import annotations

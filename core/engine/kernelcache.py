@@ -17,17 +17,20 @@ from pathlib import Path
 #: What the commands (and the pytest plugin) say before they compile a new version's kernels.
 NOTICE = "compiling the kernel (once per version, under half a minute on a few cores)..."
 
-#: The files whose code or constants the compiled kernels contain: every module kernel.py takes
-#: names from, and nothing else. Numba notices a change to a kernel's own file only (it keeps the
-#: values of globals taken from other modules as they were when it compiled), so the cache folder
-#: is named after them; an edit to any other module compiles nothing anew.
-KERNEL_SOURCES = ("kernel.py", "pixels.py", "jit.py", "layout.py", "hashing.py", "traversal.py", "prefetch.py")
+#: The engine package: the files whose code or constants the compiled kernels contain. Numba
+#: notices a change to a kernel's own file only (it keeps the values of globals taken from other
+#: modules as they were when it compiled), so the cache folder is named after all of them; the
+#: engine imports nothing outside itself, so an edit anywhere else compiles nothing anew.
 
 #: How many earlier versions of these sources keep their compiled kernels (about 5 MB each).
 KEPT_VERSIONS = 2
 
-#: The folder they are in: this package's.
 SOURCES = Path(__file__).parent
+
+
+def kernel_sources(folder: Path = SOURCES) -> list[str]:
+    """The engine's modules in ``folder``, by name."""
+    return sorted(path.name for path in folder.glob("*.py"))
 
 
 def _setting(folder: Path) -> str:
@@ -40,7 +43,7 @@ def _setting(folder: Path) -> str:
 def version_hash(folder: Path = SOURCES) -> str:
     """A hash of the kernel sources in ``folder`` and of :func:`_setting`: a version of the kernels."""
     h = hashlib.sha256(_setting(folder).encode())
-    for name in KERNEL_SOURCES:
+    for name in kernel_sources(folder):
         h.update((folder / name).read_bytes())
     return h.hexdigest()[:16]
 
@@ -75,7 +78,7 @@ def is_compiled() -> bool:
 
 
 def mark_compiled() -> None:
-    """Note that the kernels are compiled and cached (:func:`sandmod.warmup.compile_kernels` does),
+    """Note that the kernels are compiled and cached (:func:`sandmod.jobs.warmup.compile_kernels` does),
     and remove the compiled kernels of this copy's older versions."""
     setting = _setting(SOURCES)
     try:

@@ -20,7 +20,7 @@ from typing import Any, Callable, Mapping, NamedTuple
 
 import numpy as np
 
-from .compiler import (
+from ..rules.compiler import (
     ARCHETYPE_CODES,
     GLOW_STEP,
     SUBCELL,
@@ -30,7 +30,7 @@ from .compiler import (
     blast_row,
     temperature_units,
 )
-from .layout import (  # noqa: F401  (names the other modules take from here too)
+from ..engine.layout import (  # noqa: F401  (names the other modules take from here too)
     BURNING,
     CACHE_LINE,
     CHUNK,
@@ -48,10 +48,10 @@ from .layout import (  # noqa: F401  (names the other modules take from here too
     WAKE_MARGIN,
     WHOLE,
 )
-from .modspec import Explosion
-from .threads import Chooser
-from .threads import available as threads_available
-from .hashing import (
+from ..formats.modspec import Explosion
+from ..engine.threads import Chooser
+from ..engine.threads import available as threads_available
+from ..engine.hashing import (
     ROLL_BITS,
     SALT_MOVE,
     SALT_PAINT,
@@ -230,7 +230,7 @@ class World:
         self._fast_gain = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile: did the kernel's fast loop pay?
         self._also_present = 0  # -1: the kernel looks for partners next to every cell, none skipped (for tests)
         self._fast_route = 0  # 1: every tile through the kernel's fast loop, -1: none (for tests); 0: as it pays
-        self.threads: int | None = None  # threads to step on; None: as many as pay (see sandmod.threads)
+        self.threads: int | None = None  # threads to step on; None: as many as pay (see sandmod.engine.threads)
         self._chooser: Chooser | None = None  # picks them then
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []
@@ -290,7 +290,7 @@ class World:
     ) -> int:
         """:meth:`paint_cells` in the kernel, for what is painted every frame; ``velocity``: the
         painted cells' (vx, vy) arrays in 1/256ths of a cell a frame, or None for at rest."""
-        from . import kernel  # the current one, even where ``self.kernel`` is another version being timed
+        from ..engine import kernel  # the current one, even where ``self.kernel`` is another version being timed
 
         t = self.ruleset.tables
         vx, vy = (_AT_REST, _AT_REST) if velocity is None else velocity
@@ -401,12 +401,12 @@ class World:
         self._explode(self.blast_row(x, y, explosion)[None, :], 1)
 
     #: The module whose ``step``, ``take_detonations`` and ``explode`` advance this world:
-    #: :mod:`sandmod.kernel` unless set (``sandmod bench --against`` times another version of it).
+    #: :mod:`sandmod.engine.kernel` unless set (``sandmod bench --against`` times another version of it).
     kernel = None
 
     def _kernel(self):
         if self.kernel is None:
-            from . import kernel
+            from ..engine import kernel
 
             return kernel
         return self.kernel
@@ -464,7 +464,7 @@ class World:
         self.frame += 1
 
     def _thread_count(self) -> int:
-        """This frame's thread count: :attr:`threads`, or as many as pay (see :mod:`sandmod.threads`);
+        """This frame's thread count: :attr:`threads`, or as many as pay (see :mod:`sandmod.engine.threads`);
         numba's threads set to it when more than one."""
         if self.threads is not None:
             hands = max(1, min(self.threads, threads_available()))
@@ -501,7 +501,7 @@ class World:
         yellow. With ``changed_only``, only the chunks that may have changed in
         the last step are drawn (``out`` holds the rest from before).
         """
-        from . import pixels
+        from ..engine import pixels
 
         looks, s = self.ruleset.looks, self.state
         out = np.empty((self.height, self.width), np.uint8) if out is None else out
@@ -514,8 +514,8 @@ class World:
 
     def heat_image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
         """Every cell's temperature as a colour, RGB (height, width, 3): blue cold, dark at 20 degrees,
-        then purple, red, orange, yellow and white (see :data:`sandmod.pixels.HEAT_SCALE`)."""
-        from . import pixels
+        then purple, red, orange, yellow and white (see :data:`sandmod.engine.pixels.HEAT_SCALE`)."""
+        from ..engine import pixels
 
         out = np.empty((self.height, self.width, 3), np.uint8) if out is None else out
         pixels.heat_rgb(self.cells, self.state.heat, self.tables.heat_recip, _heat_colours(), self.awake if changed_only else _ALL_CHUNKS, out)
@@ -540,7 +540,7 @@ class World:
         return paint_shape(self, {**(table or {}), **fields})
 
     def save_snapshot(self, path: str | Path) -> None:
-        """Write the whole state to an ``.npz`` file (atomically); see :mod:`sandmod.snapshots`."""
+        """Write the whole state to an ``.npz`` file (atomically); see :mod:`sandmod.world.snapshots`."""
         from .snapshots import save_snapshot
 
         save_snapshot(self, Path(path))
@@ -556,13 +556,23 @@ class World:
         """The frame as a PNG, each cell a block of pixels: how a notebook shows a world."""
         import io
 
-        from .recording import write_png
-        from .render import enlarge
+        from ..formats.recording import write_png
 
         scale = max(1, min(8, 512 // max(self.width, self.height)))
         out = io.BytesIO()
         write_png(out, enlarge(self.image(), scale), self.ruleset.palette)
         return out.getvalue()
+
+
+def enlarge(frame: np.ndarray, scale: int) -> np.ndarray:
+    """Each pixel as a ``scale`` x ``scale`` block (nearest neighbour)."""
+    if scale == 1:
+        return frame
+    height, width = frame.shape
+    big = np.empty((height, scale, width, scale), frame.dtype)
+    big[...] = frame[:, None, :, None]
+    return big.reshape(height * scale, width * scale)
+
 
 _ALL_CHUNKS = np.zeros((0, 0), np.uint16)  # pixels' chunk mask for "every chunk"
 _GLOW_STEP = temperature_units(GLOW_STEP)
@@ -570,7 +580,7 @@ _GLOW_STEP = temperature_units(GLOW_STEP)
 
 @functools.cache
 def _heat_colours() -> np.ndarray:
-    from .pixels import heat_colours
+    from ..engine.pixels import heat_colours
 
     return heat_colours()
 

@@ -16,9 +16,9 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from .errors import Problem, ProblemsError
-from .hashing import chance_threshold
-from .layout import (  # noqa: F401  (names the other modules take from here too)
+from ..errors import Problem, ProblemsError
+from ..engine.hashing import chance_threshold
+from ..engine.layout import (  # noqa: F401  (names the other modules take from here too)
     ALWAYS,
     ARCHETYPE_CODES,
     BLAST_COLUMNS,
@@ -42,8 +42,8 @@ from .layout import (  # noqa: F401  (names the other modules take from here too
     TEMP_ONE,
 )
 from .modset import LoadedMod
-from .modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
-from .tomlsource import TomlSource
+from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
+from ..formats.tomlsource import TomlSource
 
 #: Most elements a ruleset may hold (palette renders use 256 colours).
 MAX_ELEMENTS = 256
@@ -324,7 +324,7 @@ def _fill_heat(t: Tables, info: ElementInfo, resolve) -> None:
 
 
 def blast_row(explosion, leaves: int, x: int = 0, y: int = 0) -> np.ndarray:
-    """An explosion (a :class:`~sandmod.modspec.Explosion`) as a row of the kernel's blast table."""
+    """An explosion (a :class:`~sandmod.formats.modspec.Explosion`) as a row of the kernel's blast table."""
     row = np.zeros(BLAST_COLUMNS, np.int64)
     row[BLAST_X], row[BLAST_Y] = x, y
     row[BLAST_RADIUS] = explosion.radius

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiler import Ruleset
+from ..rules.compiler import Ruleset
 
 SWATCH = 16  # pixels per colour square
 GAP = 8  # pixels between groups

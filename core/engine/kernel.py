@@ -1,7 +1,7 @@
 """The numba kernel: one frame of the cellular automaton.
 
 The kernel reads only what it is given: the world's arrays (a
-:class:`~sandmod.world.State`), the compiled :class:`~sandmod.compiler.Tables`,
+:class:`~sandmod.world.world.State`), the compiled :class:`~sandmod.rules.compiler.Tables`,
 and per-frame hash keys. Adding or editing a mod changes the tables' contents,
 never the compiled code.
 
@@ -25,7 +25,7 @@ their dispersion. Particles fly by their velocity through empty cells and put
 down what they carry where they hit something.
 
 Every move of more than one cell walks the line traversal
-(:func:`sandmod.traversal.line_point`) and stops at the first cell it may not
+(:func:`sandmod.engine.traversal.line_point`) and stops at the first cell it may not
 enter: only the first cell of a move may be a fluid to swap with (the move
 ends there), the others must be empty, and a diagonal step needs one of its
 two side cells open, so nothing passes through a wall or between two corners.
@@ -308,7 +308,7 @@ def _last_row(mark):
 
 @njit(cache=True)
 def _widened(mark, y0, y1):
-    """A chunk's wake mark (see :data:`sandmod.world.WHOLE`) widened to cover its rows y0..y1 (chunk-local)."""
+    """A chunk's wake mark (see :data:`sandmod.world.world.WHOLE`) widened to cover its rows y0..y1 (chunk-local)."""
     if mark == WHOLE:
         return WHOLE
     if mark != 0:
@@ -364,7 +364,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
 
     A row of a chunk is updated when the chunk's mark in ``awake`` (from last
     frame) or ``woken`` (by a change nearby earlier this frame) covers it (see
-    :data:`sandmod.world.WHOLE`). Every change, and every chance that did not
+    :data:`sandmod.world.world.WHOLE`). Every change, and every chance that did not
     come up, widens the ``woken`` marks to the rows within two cells of where
     it happened, and where an element or a heat changed, other than
     by two cells of one temperature trading places, in ``stirred`` too (see
@@ -1252,7 +1252,7 @@ def step_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
 
 @njit(cache=True)
 def paint_cells(s, ys, xs, element, cargo, vx, vy, only_empty, threshold, chance_key, spawn_key, life_frames, life_jitter, energy, awake, even):
-    """:meth:`sandmod.world.World.paint_cells` for what is painted every frame: emitters and sprays.
+    """:meth:`sandmod.world.world.World.paint_cells` for what is painted every frame: emitters and sprays.
 
     Each cell ``ys[i]``, ``xs[i]`` (an empty one, with ``only_empty``; a cell
     given twice counts once) whose roll under ``chance_key`` is below

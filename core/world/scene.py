@@ -10,16 +10,16 @@ import numpy as np
 
 from pydantic import BaseModel, ConfigDict
 
-from .compiler import Ruleset
-from .errors import Problem, ProblemsError
-from .limits import PICTURE_BYTES_PER_PIXEL, WORLD_BYTES_PER_CELL, MemoryBudget
-from .pictures import PictureError, fit, hex_rgb, legend_indices, read_rgba
+from ..rules.compiler import Ruleset
+from ..errors import Problem, ProblemsError
+from ..formats.limits import PICTURE_BYTES_PER_PIXEL, WORLD_BYTES_PER_CELL, MemoryBudget
+from ..formats.pictures import PictureError, fit, hex_rgb, legend_indices, read_rgba
 from .shapes import Patch, circle_mask, fill_mask, rect_mask, stroke_mask
-from .tomlsource import Loc, TomlSource
-from .userfiles import Refused, inside
-from .validation import validate
+from ..formats.tomlsource import Loc, TomlSource
+from ..formats.userfiles import Refused, inside
+from ..formats.validation import validate
 from .world import Emitter, Heater, Painting, Spray, Switches, World
-from .worldspec import (
+from ..formats.worldspec import (
     Burst,
     Shape,
     CircleArea,

@@ -9,9 +9,9 @@ from typing import Callable, NamedTuple, Sequence
 
 import numpy as np
 
-from .limits import MemoryBudget
-from .recording import RecorderSpec, VideoSettings, atomic_folder, atomic_path, write_png, writing
-from .world import World
+from ..formats.limits import MemoryBudget
+from ..formats.recording import RecorderSpec, VideoSettings, atomic_folder, atomic_path, write_png, writing
+from ..world.world import World, enlarge
 
 
 class Crop(NamedTuple):
@@ -48,16 +48,6 @@ class Framing:
             x, y, w, h = self.crop
             frame = frame[y : y + h, x : x + w]
         return enlarge(frame, self.scale)
-
-
-def enlarge(frame: np.ndarray, scale: int) -> np.ndarray:
-    """Each pixel as a ``scale`` x ``scale`` block (nearest neighbour)."""
-    if scale == 1:
-        return frame
-    height, width = frame.shape
-    big = np.empty((height, scale, width, scale), frame.dtype)
-    big[...] = frame[:, None, :, None]
-    return big.reshape(height * scale, width * scale)
 
 
 def render_problems(recorder: RecorderSpec, world: World, framing: Framing, frames: int, every: int, memory: MemoryBudget) -> list[str]:

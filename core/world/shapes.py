@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .traversal import line_cells
+from ..engine.traversal import line_cells
 
 
 def rect_mask(width: int, height: int, x: int, y: int, w: int, h: int) -> np.ndarray:

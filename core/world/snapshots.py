@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .errors import Problem, ProblemsError, display_path
-from .userfiles import NO_SUCH_FILE, Refused, open_regular
-from .worldspec import MAX_SIZE
-from .recording import atomic_path, writing
+from ..errors import Problem, ProblemsError, display_path
+from ..formats.userfiles import NO_SUCH_FILE, Refused, open_regular
+from ..formats.worldspec import MAX_SIZE
+from ..formats.recording import atomic_path, writing
 from .world import State, World
 
 #: Bumped when the layout changes; older files are refused with a clear message.

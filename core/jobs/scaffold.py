@@ -13,9 +13,9 @@ from typing import Any
 import tomli_w
 from pydantic import BaseModel
 
-from .modspec import ARCHETYPES, Element, ModFile
-from .tomlsource import TomlSource
-from .validation import validate
+from ..formats.modspec import ARCHETYPES, Element, ModFile
+from ..formats.tomlsource import TomlSource
+from ..formats.validation import validate
 
 #: The parameters written for a new element, in this order, where its archetype has them.
 WRITTEN = (
@@ -185,6 +185,6 @@ def new_world(size: tuple[int, int], mods: list[str] | None, made_with: dict[str
 
 def check_world(text: str, origin: str):
     """Parse and validate a world file's text."""
-    from .worldspec import WorldFile
+    from ..formats.worldspec import WorldFile
 
     return validate(WorldFile, TomlSource.parse(text, origin))

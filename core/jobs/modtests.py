@@ -18,10 +18,10 @@ from typing import Sequence
 
 import numpy as np
 
-from .compiler import Ruleset, compile_mods
-from .errors import Problem, ProblemsError
-from .modset import LoadedMod, ModSet
-from .modspec import ModTest, Placed
+from ..rules.compiler import Ruleset, compile_mods
+from ..errors import Problem, ProblemsError
+from ..rules.modset import LoadedMod, ModSet
+from ..formats.modspec import ModTest, Placed
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ class TestRunner:
 
     def run(self, case: TestCase) -> Outcome:
         """Run one test; ProblemsError if it names elements that are not loaded."""
-        from .world import World
+        from ..world.world import World
 
         spec, r = case.spec, self.check(case)
         rows = spec.rows("scene")

@@ -5,7 +5,7 @@ the exact line, rounded half away from zero, so a line and its mirror image
 in any of the eight octants visit mirrored cells. Neighbouring cells of the
 path touch by a side or a corner, with no gaps.
 
-:func:`line_point` is plain integer arithmetic, like :mod:`sandmod.hashing`:
+:func:`line_point` is plain integer arithmetic, like :mod:`sandmod.engine.hashing`:
 the kernel compiles this very function for every multi-cell move (falls,
 slides, liquid flow, particles), and :func:`line_cells` uses it for brushes,
 scene lines and emitters, so all of them walk the same cells.

@@ -1,5 +1,5 @@
-"""numba, set up for sandmod's compiled code: its threads' settings (:mod:`sandmod.threads`)
-and its cache folder (:mod:`sandmod.kernelcache`) fixed before numba starts, then the
+"""numba, set up for sandmod's compiled code: its threads' settings (:mod:`sandmod.engine.threads`)
+and its cache folder (:mod:`sandmod.engine.kernelcache`) fixed before numba starts, then the
 decorators every compiled module uses. Import numba through here."""
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import display_path
+from ..errors import display_path
 from .userfiles import NO_SUCH_FILE, Refused, open_regular
 
 #: Pixels less opaque than this are transparent: they leave their cells alone.

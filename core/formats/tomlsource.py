@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
-from .errors import Problem, ProblemsError, display_path
+from ..errors import Problem, ProblemsError, display_path
 from .userfiles import Refused, read_bytes
 
 Loc = tuple[str | int, ...]

@@ -2,12 +2,12 @@
 saying on the terminal how far along it is.
 
 numba compiles a function when it is first called, and caches what it
-compiled on disk (:mod:`sandmod.kernelcache`); a later process loads it in a
+compiled on disk (:mod:`sandmod.engine.kernelcache`); a later process loads it in a
 fraction of a second. The parts that take longest (the cell update with and
 without its fast loop, about a quarter of a minute each) do not depend on
 each other, so :func:`compile_kernels` compiles each in a process of its own,
 as many at once as there are CPUs, then steps a tiny world itself: what the
-parts left to link loads from the cache. Run as ``python -m sandmod.warmup
+parts left to link loads from the cache. Run as ``python -m sandmod.jobs.warmup
 PART``, this module compiles one part.
 
 Compiled only when a run needs it: the kernel that updates tiles on several
@@ -30,9 +30,9 @@ PARTS = ("cells with the fast loop", "cells without it", "heat", "blasts", "taps
 
 
 def _tiny_world():
-    from .layout import CHUNK
-    from .loading import load_ruleset
-    from .world import World
+    from ..engine.layout import CHUNK
+    from ..world.loading import load_ruleset
+    from ..world.world import World
 
     return World(load_ruleset(), CHUNK, CHUNK)
 
@@ -60,12 +60,12 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
     """Compile (or load from the cache) every kernel a world on one thread uses: the
     :data:`PARTS` side by side in processes of their own, then a step of a tiny world of
     ``ruleset`` (default: the bundled mods') here; then note this version as compiled
-    (:mod:`sandmod.kernelcache`). ``announce`` hears how far along it is. Returns the seconds.
+    (:mod:`sandmod.engine.kernelcache`). ``announce`` hears how far along it is. Returns the seconds.
 
     A world compiles each kernel when it first needs it, so without this the first
     explosion after a new version would stop a render for a while, unannounced.
     """
-    from . import kernelcache
+    from ..engine import kernelcache
 
     started = time.perf_counter()
     say = announce or (lambda line: None)
@@ -83,9 +83,9 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
 
 def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None = None) -> None:
     """:func:`compile_kernels` if this version's are not compiled yet, first handing
-    ``announce`` (when given) the notice to show (:data:`sandmod.kernelcache.NOTICE`), then
+    ``announce`` (when given) the notice to show (:data:`sandmod.engine.kernelcache.NOTICE`), then
     how far along it is."""
-    from . import kernelcache
+    from ..engine import kernelcache
 
     if kernelcache.is_compiled():
         return
@@ -97,7 +97,7 @@ def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None =
 def compile_parallel(world=None, announce: Callable[[str], object] | None = None) -> None:
     """Compile (or load) the kernel that updates a pass's tiles on several threads at once,
     if ``world`` (any, if None) may step on several."""
-    from .threads import MIN_TILES_A_PASS, available
+    from ..engine.threads import MIN_TILES_A_PASS, available
 
     if available() < 2:
         return
@@ -111,14 +111,14 @@ def compile_parallel(world=None, announce: Callable[[str], object] | None = None
 
 
 def _world_of(ruleset):
-    from .layout import CHUNK
-    from .world import World
+    from ..engine.layout import CHUNK
+    from ..world.world import World
 
     return World(ruleset, CHUNK, CHUNK)
 
 
 def _cached(function: str) -> bool:
-    from .kernelcache import kernel_cache_dir
+    from ..engine.kernelcache import kernel_cache_dir
 
     return any(kernel_cache_dir().rglob(f"kernel.{function}-*.nbi"))
 
@@ -133,7 +133,7 @@ def _compile_parts(progress: Callable[[int], object]) -> None:
     try:
         while waiting or running:
             while waiting and len(running) < most:
-                command = [sys.executable, "-m", "sandmod.warmup", waiting.pop(0)]
+                command = [sys.executable, "-m", "sandmod.jobs.warmup", waiting.pop(0)]
                 # What fails here fails again, and says why, when this process compiles it itself.
                 running.append(subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
             time.sleep(0.05)
@@ -147,7 +147,7 @@ def _compile_parts(progress: Callable[[int], object]) -> None:
 
 
 def _cache_dir():
-    from .kernelcache import kernel_cache_dir
+    from ..engine.kernelcache import kernel_cache_dir
 
     return kernel_cache_dir()
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from numba import njit, prange
 
-from .kernel import _at, _mix32, _within  # the kernel's unsigned indices: numba's wrap-around would cost a quarter
+from ..engine.kernel import _at, _mix32, _within  # the kernel's unsigned indices: numba's wrap-around would cost a quarter
 
 
 @njit(cache=True, parallel=True)

@@ -21,8 +21,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .compiler import Ruleset
-from .world import World
+from ..rules.compiler import Ruleset
+from ..world.world import World
 
 #: Elements of the ``everything`` scene and their shares of the cells (the rest is empty).
 EVERYTHING = {
@@ -145,9 +145,9 @@ def scene_bench(ruleset: Ruleset, scene: str, size: int, seed: int = 0) -> Bench
 def world_bench(path: Path, *, mod_dirs: Sequence[Path] = (), seed: int | None = None) -> tuple[Bench, list[str]]:
     """A world file, as ``sandmod render`` would start it (its mods, scene, emitters and
     timeline), and the warnings about its mods. Raises ProblemsError for a bad file."""
-    from .errors import display_path
-    from .loading import load_world
-    from .scene import build_world
+    from ..errors import display_path
+    from ..world.loading import load_world
+    from ..world.scene import build_world
 
     loaded = load_world(path, mod_dirs=mod_dirs, seed=seed)
 
@@ -258,8 +258,8 @@ def render_peak_memory(size: int, frames: int = 4, output_format: str = "gif") -
     import subprocess
     import tempfile
 
-    from .limits import MemoryBudget
-    from .loading import read_world_spec
+    from ..formats.limits import MemoryBudget
+    from ..world.loading import read_world_spec
 
     with tempfile.TemporaryDirectory() as folder:
         world = Path(folder) / "w.toml"
@@ -270,13 +270,13 @@ def render_peak_memory(size: int, frames: int = 4, output_format: str = "gif") -
         output = Path(folder) / f"out.{output_format}"
         args = ["render", str(world), "-o", str(output), "--frames", str(frames), "--every", "1", "--scale", "1", "-q", "--max-memory", "none"]
         code = (
-            "import sys; from sandmod import benchmark; from sandmod.tools.cli import cli\n"
+            "import sys; from sandmod.jobs import benchmark; from sandmod.tools.cli import cli\n"
             f"try:\n    cli({args!r}, prog_name='sandmod')\nexcept SystemExit as end:\n    assert not end.code, end.code\n"
             "print(benchmark.peak_memory_mb())"
         )
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
         spec, _ = read_world_spec(world)
-    from .limits import WORLD_BYTES_PER_CELL
+    from ..formats.limits import WORLD_BYTES_PER_CELL
 
     budget = MemoryBudget(None)
     budget.take(spec.world.width * spec.world.height * WORLD_BYTES_PER_CELL, "the world")
@@ -355,7 +355,7 @@ def load_kernel(path) -> ModuleType | _OlderKernel:
     """Another version of ``sandmod/kernel.py`` (say, from ``git show REV:core/kernel.py``), importable
     beside this one; its relative imports name this sandmod's modules. Raises ValueError if it is none."""
     module = _import_kernel(path)
-    from . import kernel
+    from ..engine import kernel
 
     takes = _arguments(module.step)
     flat = not hasattr(module, "_mark")
@@ -368,7 +368,7 @@ def _arguments(function) -> int:
 
 
 def _import_kernel(path) -> ModuleType:
-    from . import kernel
+    from ..engine import kernel
 
     if Path(path).resolve() == Path(kernel.__file__).resolve():
         # Itself: imported again under another name, it would share numba's cache files with this
@@ -477,7 +477,7 @@ def compare(
     accepts another's marks: they only ever cover more than is needed).
     With ``own_frames`` (kernels whose rules differ), each kernel goes on from
     its own state instead, and frames may differ. A count of None lets the
-    world choose as it steps (see :mod:`sandmod.threads`).
+    world choose as it steps (see :mod:`sandmod.engine.threads`).
     """
     counts = list(threads) if isinstance(threads, (list, tuple)) else [threads] * len(kernels)
     world = bench.make()
@@ -518,7 +518,7 @@ def compare(
 
 @dataclass(frozen=True)
 class Yardstick(Turns):
-    """One thread count: this kernel and :mod:`sandmod.yardstick` in turns (``sandmod bench --yardstick``).
+    """One thread count: this kernel and :mod:`sandmod.jobs.yardstick` in turns (``sandmod bench --yardstick``).
 
     ``threads`` is the count for both: the yardstick cuts the world into as many bands of columns.
     """
@@ -542,7 +542,7 @@ def against_yardstick(
     import numba
 
     from . import yardstick
-    from .hashing import SALT_MOVE, frame_key
+    from ..engine.hashing import SALT_MOVE, frame_key
 
     world = bench.make()
     ruleset = world.ruleset
@@ -582,8 +582,8 @@ def against_yardstick(
 def numpy_image(world: World) -> np.ndarray:
     """:meth:`World.image` in numpy, as it was before the compiled one: the slow, obvious reference
     that tests hold the compiled pixels to, and that ``sandmod bench --pixels`` times them against."""
-    from .compiler import GLOW_COLOURS, GLOW_FROM, GLOW_STEP, temperature_units
-    from .layout import SCORCHED
+    from ..rules.compiler import GLOW_COLOURS, GLOW_FROM, GLOW_STEP, temperature_units
+    from ..engine.layout import SCORCHED
 
     looks, s = world.ruleset.looks, world.state
     shown = world.shown()
@@ -673,7 +673,7 @@ class RecordResult(_Result):
 
 def record(bench: Bench, recorder, images: int, threads: int, folder) -> RecordResult:
     """Render ``images`` steps of ``bench``'s world with ``recorder`` into ``folder``, timing each part."""
-    from .recording import VideoSettings, output_bytes
+    from ..formats.recording import VideoSettings, output_bytes
 
     world = bench.make()
     world.threads = threads

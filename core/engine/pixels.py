@@ -3,7 +3,7 @@
 A cell shows its element's colour in its own shade (a particle shows what it
 carries); a scorched cell a darker shade; a cell hotter than its element's
 glow point glows red, orange, then yellow-white, a level every GLOW_STEP
-degrees (see :class:`sandmod.compiler.Looks`). The heat view shows every
+degrees (see :class:`sandmod.rules.compiler.Looks`). The heat view shows every
 cell's temperature instead, on one colour scale for all elements.
 
 Each function takes the world's arrays and writes into ``out``, for the
@@ -51,7 +51,7 @@ def _units(energy, recip):
 @njit(cache=True)
 def palette_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorched, glow, glow_from, glow_step, glow_energy, chunks, out):
     """Write every cell's palette index into ``out`` (uint8, the world's shape); ``chunks``: a
-    mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.compiler.Looks.glow_energy`."""
+    mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.rules.compiler.Looks.glow_energy`."""
     height, width = cells.shape
     shades, scorched_shades, levels = normal.shape[1], scorched.shape[1], glow.shape[1]
     every = chunks.shape[0] == 0

@@ -24,7 +24,7 @@ PATTERN_HINTS: dict[str, str] = {}
 
 def validate(model: type[M], source: TomlSource) -> M:
     """Validate ``source.data`` as ``model``; raise ProblemsError naming every mistake."""
-    from .errors import ProblemsError
+    from ..errors import ProblemsError
 
     try:
         return model.model_validate(source.data)
