@@ -15,7 +15,8 @@ import pytest
 from conftest import as_rows, make_world, run, write_mods
 from sandmod.jobs import benchmark
 from sandmod.world.loading import load_ruleset, load_world
-from sandmod.world.world import CACHE_LINE, CHUNK, PART, TILE, WAKE_MARGIN, WHOLE, World
+from sandmod.engine.layout import CACHE_LINE, CHUNK, PART, TILE, WAKE_MARGIN, WHOLE
+from sandmod.world.world import World
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

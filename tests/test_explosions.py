@@ -8,7 +8,7 @@ import pytest
 
 from conftest import make_world
 from sandmod.formats.modspec import Explosion
-from sandmod.world.world import SCORCHED
+from sandmod.engine.layout import SCORCHED
 
 
 def field(ruleset, char="#", size=61):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from conftest import make_world, run
-from sandmod.world.world import BURNING
+from sandmod.engine.layout import BURNING
 
 
 def burning(world) -> int:

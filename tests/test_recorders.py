@@ -13,7 +13,8 @@ from sandmod.world.loading import load_registry
 from sandmod.formats.recording import VideoSettings
 from sandmod.jobs.render import Crop, Framing, render
 from sandmod.world.world import enlarge
-from sandmod.world.world import SCORCHED, World
+from sandmod.engine.layout import SCORCHED
+from sandmod.world.world import World
 
 REGISTRY = load_registry()
 

@@ -670,13 +670,8 @@ def test_(mods, mod_dirs) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object per run.")
 @click.option("--record", "formats", multiple=True, metavar="FORMAT",
               help="Time rendering instead: an image a step, recorded as FORMAT (repeatable: gif, apng, webp, png-frames).")
-@click.option("--against", type=click.Path(exists=True, dir_okay=False), metavar="KERNEL.py",
-              help="Compare with another version of the kernel on the same frames (e.g. from git show REV:core/kernel.py).")
-@click.option("--own-frames", is_flag=True, help="With --against: the kernels' rules differ, so each steps on from its own frames.")
-@click.option("--in-turns", is_flag=True, help="Time the --threads counts in turns on the same frames, as --against times kernels.")
-@click.option("--yardstick", is_flag=True, help="Time the kernel in turns with the simplest sand and water step (see below).")
 @_mods_option
-def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy, no_sleep, seed, as_json, formats, against, own_frames, in_turns, yardstick, mod_dirs) -> None:
+def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy, no_sleep, seed, as_json, formats, mod_dirs) -> None:
     """Time the kernel on a built-in scene or a world file: steps/s, million cell-updates/s, chunks awake, memory.
 
     \b
@@ -702,30 +697,14 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
     --max-memory is checked against.
 
     --busy N keeps N other processes spinning on the CPUs while it times,
-    as on a user's machine: with --threads auto --threads 1 --in-turns it
-    shows what the default thread count does when the machine is busy.
+    as on a user's machine.
 
-    With --against, this kernel and the other take turns over stretches of
-    25 steps, each stretch three times from the same state, and the best
-    times count: a fair comparison on a machine whose speed drifts. Both
-    must step to the same frames (exit 1 where they do not), unless
-    --own-frames says their rules differ: then each goes on from its own
-    state, and the times compare the same scene, not the same frames. --in-turns
-    does the same for the --threads counts (say --threads 1 --threads 2):
-    their speeds, each over the first's, and a check that every count steps
-    to the same frames.
-
-    With --yardstick, the kernel takes turns in the same way with the
-    yardstick, on each --threads count: a dozen-line numba step in which
-    sand falls and sinks through water and water flows, and nothing else
-    (no velocity, heat, reactions or sleeping chunks; on several threads,
-    each steps its own band of columns). It shows what this machine allows
-    at the time, the kernel's speed as a share of it, and what more
-    threads give each of them. It runs on the scenes only.
+    Developers' comparisons (another version of the kernel, thread counts
+    in turns, the yardstick) are in tools/dev/bench.py in a checkout.
     """
+    from sandmod.engine import kernelcache
     from sandmod.jobs import benchmark
 
-    from sandmod.engine import kernelcache
     if memory_sizes:
         for side in memory_sizes:
             found = benchmark.render_peak_memory(side)
@@ -738,14 +717,6 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
         return
     if size is not None and worlds and not scenes:
         raise click.UsageError("--size sizes the built-in scenes; a world file has its own size")
-    if sum(map(bool, (against, in_turns, yardstick))) > 1:
-        raise click.UsageError("--against, --in-turns and --yardstick do not go together: give one")
-    if own_frames and not against:
-        raise click.UsageError("--own-frames goes with --against")
-    if yardstick and None in thread_counts:
-        raise click.UsageError("--yardstick times fixed thread counts: give --threads N")
-    if yardstick and worlds:
-        raise click.UsageError("--yardstick runs on the built-in scenes (its rules know sand and water only), not on a --world")
     thread_counts = thread_counts or (None,)
     _thread_pool(max((c for c in thread_counts if c is not None), default=1))
     from sandmod.world.loading import load_ruleset
@@ -776,20 +747,14 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
             )
         return
     with benchmark.busy_processes(busy):
-        _bench_runs(runs, thread_counts, as_json, formats, against, own_frames, in_turns, yardstick, no_sleep, compile_seconds)
+        _bench_runs(runs, thread_counts, as_json, formats, no_sleep, compile_seconds)
 
 
-def _bench_runs(runs, thread_counts, as_json, formats, against, own_frames, in_turns, yardstick, no_sleep, compile_seconds) -> None:
+def _bench_runs(runs, thread_counts, as_json, formats, no_sleep, compile_seconds) -> None:
     from sandmod.jobs import benchmark
 
     if formats:
         _bench_recording(formats, runs, thread_counts, as_json)
-    elif against:
-        _bench_against(against, runs, thread_counts, as_json, own_frames)
-    elif in_turns:
-        _bench_in_turns(runs, thread_counts, as_json)
-    elif yardstick:
-        _bench_yardstick(runs, thread_counts, as_json)
     else:
         for b, count in runs:
             for threads in thread_counts:
@@ -819,91 +784,6 @@ def _threads(count: int | str | None) -> str:
 def _report(result, as_json: bool, line: str) -> None:
     """One bench run: its JSON object, or a line for people."""
     click.echo(json.dumps(result.as_dict()) if as_json else line)
-
-
-def _bench_against(path, runs, thread_counts, as_json, own_frames: bool) -> None:
-    from numba.core.errors import NumbaError
-
-    from sandmod.jobs import benchmark
-
-
-    from sandmod.engine import kernel
-    try:
-        other = benchmark.load_kernel(path)
-    except ValueError as error:
-        raise click.BadParameter(str(error), param_hint="'--against'") from None
-    for b, steps in runs:
-        cells = b.width * b.height * steps / 1e6
-        for threads in thread_counts:
-            try:
-                ours, theirs = benchmark.compare(b, steps, threads, [kernel, other], own_frames=own_frames)
-            except benchmark.FramesDiffer as differ:
-                click.echo(f"error: {b.name}: {path} steps to other frames than this kernel (by frame {differ.frame})", err=True)
-                sys.exit(1)
-            except NumbaError as error:  # it imports, but its code does not fit this sandmod's arrays
-                first = str(error).strip().splitlines()[0]
-                raise click.BadParameter(f"{path}: does not compile beside this sandmod ({type(error).__name__}: {first})", param_hint="'--against'") from None
-            result = benchmark.Comparison(
-                b.name, b.width, b.height, steps, _named(threads), round(cells / ours, 1), str(path), round(cells / theirs, 1), round(theirs / ours, 3), not own_frames
-            )
-            _report(
-                result,
-                as_json,
-                f"{_what(b, steps)}, {_threads(threads)}: "
-                f"this kernel {result.mcell_updates_per_second:.1f} million cell-updates/s, {path} "
-                f"{result.against_mcell_updates_per_second:.1f}: {result.speedup:.3f}x, {'same frames' if result.same_frames else 'each on its own frames'}",
-            )
-
-
-def _bench_in_turns(runs, thread_counts, as_json) -> None:
-    from sandmod.jobs import benchmark
-
-    from sandmod.engine import kernel
-    for b, steps in runs:
-        cells = b.width * b.height * steps / 1e6
-        try:
-            seconds = benchmark.compare(b, steps, thread_counts, [kernel] * len(thread_counts))
-        except benchmark.FramesDiffer as differ:  # a bug in the kernel: threads must never change the frames
-            click.echo(f"error: {b.name}: {_threads(thread_counts[0])} and more step to other frames (by frame {differ.frame})", err=True)
-            sys.exit(1)
-        results = [
-            benchmark.Turns(b.name, b.width, b.height, steps, _named(threads), round(cells / took, 1), round(seconds[0] / took, 3), _named(thread_counts[0]))
-            for threads, took in zip(thread_counts, seconds)
-        ]
-        if as_json:
-            for result in results:
-                click.echo(json.dumps(result.as_dict()))
-        else:
-            speeds = [f"{_threads(r.threads)} {r.mcell_updates_per_second:.1f}" + (f" ({r.speedup:.2f}x)" if i else "") for i, r in enumerate(results)]
-            click.echo(f"{_what(b, steps)}, in turns: {', '.join(speeds)} million cell-updates/s, same frames")
-
-
-def _bench_yardstick(runs, thread_counts, as_json) -> None:
-    from sandmod.jobs import benchmark
-
-    for b, steps in runs:
-        cells = b.width * b.height * steps / 1e6
-        ours, theirs = benchmark.against_yardstick(b, steps, thread_counts)
-        results = [
-            benchmark.Yardstick(
-                b.name, b.width, b.height, steps, threads, round(cells / mine, 1), round(ours[0] / mine, 3), thread_counts[0],
-                yardstick_mcell_updates_per_second=round(cells / its, 1),
-                over_yardstick=round(its / mine, 3),
-                yardstick_speedup=round(theirs[0] / its, 3),
-            )
-            for threads, mine, its in zip(thread_counts, ours, theirs)
-        ]
-        if as_json:
-            for result in results:
-                click.echo(json.dumps(result.as_dict()))
-            continue
-        parts = [
-            f"{_threads(r.threads)}: this kernel {r.mcell_updates_per_second:.1f}, the yardstick "
-            f"{r.yardstick_mcell_updates_per_second:.1f} ({r.over_yardstick:.2f} of it)"
-            for r in results
-        ]
-        parts += [f"{r.threads} over {r.over_threads}: this kernel {r.speedup:.2f}x, the yardstick {r.yardstick_speedup:.2f}x" for r in results[1:]]
-        click.echo(f"{_what(b, steps)}, in turns, million cell-updates/s: {'; '.join(parts)}")
 
 
 def _bench_recording(formats, runs, thread_counts, as_json) -> None:

@@ -39,8 +39,10 @@ def _tiny_world():
 
 def compile_part(part: str) -> None:
     """Compile one of :data:`PARTS` (into the cache), by calling it on a tiny world."""
+    from ..engine import kernel
+
     world = _tiny_world()
-    kernel, s, t = world._kernel(), world.state, world.tables
+    s, t = world.state, world.tables
     if part in PARTS[:2]:
         kernel.step_region(s, t, 1, 2, 3, 0, world.awake, world._woken, world._stirred, world._detonations, 0, 0, 0, 4, 4, 0, part == PARTS[0])
     elif part == "heat":

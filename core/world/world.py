@@ -30,24 +30,7 @@ from ..rules.compiler import (
     blast_row,
     temperature_units,
 )
-from ..engine.layout import (  # noqa: F401  (names the other modules take from here too)
-    BURNING,
-    CACHE_LINE,
-    CHUNK,
-    CHUNK_SHIFT,
-    DETONATING,
-    LOOSE,
-    MOVED,
-    PART,
-    MAX_SPEED,
-    REACH,
-    REACTED,
-    SCORCHED,
-    TILE,
-    TILE_SHIFT,
-    WAKE_MARGIN,
-    WHOLE,
-)
+from ..engine.layout import CACHE_LINE, CHUNK, CHUNK_SHIFT, LOOSE, MAX_SPEED, TILE, WAKE_MARGIN, WHOLE
 from ..formats.modspec import Explosion
 from ..engine.threads import Chooser
 from ..engine.threads import available as threads_available
@@ -183,6 +166,13 @@ PAINT_BAND = 1 << 18
 _AT_REST = np.zeros(0, np.int64)  # no velocities: what World._pour paints is at rest
 
 
+def _kernel():
+    """The engine's kernel, imported on first use: importing it starts numba."""
+    from ..engine import kernel
+
+    return kernel
+
+
 def _speed_units(cells_a_frame) -> np.ndarray:
     """Speeds in cells a frame as the state holds them, 1/256ths of a cell, within MAX_SPEED
     (the kernel then holds each particle to its own max_speed)."""
@@ -290,7 +280,7 @@ class World:
     ) -> int:
         """:meth:`paint_cells` in the kernel, for what is painted every frame; ``velocity``: the
         painted cells' (vx, vy) arrays in 1/256ths of a cell a frame, or None for at rest."""
-        from ..engine import kernel  # the current one, even where ``self.kernel`` is another version being timed
+        from ..engine import kernel  # this version's, even while tools/dev steps with another
 
         t = self.ruleset.tables
         vx, vy = (_AT_REST, _AT_REST) if velocity is None else velocity
@@ -400,25 +390,14 @@ class World:
         """Set off an explosion centred on cell (x, y) now."""
         self._explode(self.blast_row(x, y, explosion)[None, :], 1)
 
-    #: The module whose ``step``, ``take_detonations`` and ``explode`` advance this world:
-    #: :mod:`sandmod.engine.kernel` unless set (``sandmod bench --against`` times another version of it).
-    kernel = None
-
-    def _kernel(self):
-        if self.kernel is None:
-            from ..engine import kernel
-
-            return kernel
-        return self.kernel
-
     def _explode(self, rows: np.ndarray, salt: int) -> None:
         key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
-        self._kernel().explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake, self._even)
+        _kernel().explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake, self._even)
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
         the kernel updates every cell, explosions go off."""
-        kernel = self._kernel()
+        kernel = _kernel()
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
                 self._pour(emitter.ys, emitter.xs, emitter.element, chance=emitter.chance, only_empty=True, salt=SALT_PAINT + 1 + number)
@@ -436,7 +415,7 @@ class World:
                 self.set_temperature(heater.area(self.cells), heater.celsius)
         hands = self._thread_count()
         started = perf_counter()
-        stepper = kernel.step_at_once if hands > 1 and hasattr(kernel, "step_at_once") else kernel.step
+        stepper = kernel.step_at_once if hands > 1 else kernel.step
         went_off = stepper(
             self.state,
             self.tables,

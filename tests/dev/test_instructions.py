@@ -1,4 +1,4 @@
-"""``python -m sandmod.tools.instructions``: counting the kernel's instructions under valgrind."""
+"""``python tools/dev/instructions.py``: counting the kernel's instructions under valgrind."""
 
 from __future__ import annotations
 
@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+import instructions
+
 from sandmod.engine import kernel
-from sandmod.tools import instructions
 
 
 def _can_count() -> bool:

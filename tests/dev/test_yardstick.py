@@ -1,4 +1,4 @@
-"""The yardstick (``sandmod bench --yardstick``) against a slow, obvious reference."""
+"""The yardstick (``tools/dev/bench.py yardstick``) against a slow, obvious reference."""
 
 from __future__ import annotations
 
@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from sandmod.jobs import benchmark, yardstick
+import bench
+import yardstick
+
+from sandmod.jobs import benchmark
 from sandmod.engine.hashing import SALT_MOVE, cell_hash, frame_key
-from sandmod.tools.cli import cli
 
 SAND, WATER, STONE = 1, 2, 3
 
@@ -58,14 +60,14 @@ def test_the_yardstick_steps_as_the_reference_does(bands):
 
 def test_against_yardstick_times_both_on_each_thread_count(ruleset):
     threads = [1, min(2, numba.config.NUMBA_NUM_THREADS)]
-    ours, theirs = benchmark.against_yardstick(benchmark.scene_bench(ruleset, "halves", 64), 30, threads, segment=8, repeats=2)
+    ours, theirs = yardstick.against_yardstick(benchmark.scene_bench(ruleset, "halves", 64), 30, threads, segment=8, repeats=2)
     assert len(ours) == len(theirs) == 2 and min(ours + theirs) > 0
 
 
 def test_bench_yardstick_prints_both_speeds():
     threads = str(min(2, numba.config.NUMBA_NUM_THREADS))
-    args = ["bench", "--scene", "mix", "--size", "256", "--steps", "4", "--threads", "1", "--threads", threads, "--yardstick"]
-    result = CliRunner().invoke(cli, [*args, "--json"], catch_exceptions=False)
+    args = ["yardstick", "--scene", "mix", "--size", "256", "--steps", "4", "--threads", "1", "--threads", threads]
+    result = CliRunner().invoke(bench.main, [*args, "--json"], catch_exceptions=False)
     assert result.exit_code == 0, result.output
     runs = [json.loads(line) for line in result.stdout.splitlines()]
     assert [(r["scene"], r["width"], r["steps"], r["threads"], r["over_threads"]) for r in runs] == [
@@ -74,7 +76,7 @@ def test_bench_yardstick_prints_both_speeds():
     for run in runs:  # timings are whatever the machine gives: only that each was taken
         assert run["mcell_updates_per_second"] > 0 and run["yardstick_mcell_updates_per_second"] > 0 and run["over_yardstick"] > 0
     assert runs[0]["speedup"] == runs[0]["yardstick_speedup"] == 1.0 and runs[1]["speedup"] > 0 and runs[1]["yardstick_speedup"] > 0
-    result = CliRunner().invoke(cli, args, catch_exceptions=False)
+    result = CliRunner().invoke(bench.main, args, catch_exceptions=False)
     assert result.exit_code == 0 and "1 thread: this kernel" in result.stdout and f"{threads} over 1: this kernel" in result.stdout
-    result = CliRunner().invoke(cli, [*args, "--in-turns"])
-    assert result.exit_code == 2 and "do not go together" in result.output
+    result = CliRunner().invoke(bench.main, [*args, "--threads", "auto"])
+    assert result.exit_code == 2 and "give --threads N" in result.output

@@ -5,10 +5,10 @@ only tell kernels apart by 6% or more (see docs/PERFORMANCE.md). The
 instructions a stretch of frames takes are exact instead: the same kernel
 on the same frames counts the same to the instruction, so a change of 1%
 shows as 1%. They are not time (a spilled register or a mispredicted branch
-costs more than an add), so confirm a gain with ``sandmod bench --against``::
+costs more than an add), so confirm a gain with ``tools/dev/bench.py against``::
 
-    python -m sandmod.tools.instructions --scene halves --start 200 --frames 20
-    python -m sandmod.tools.instructions --scene halves --start 200 --against /tmp/old_kernel.py
+    python tools/dev/instructions.py --scene halves --start 200 --frames 20
+    python tools/dev/instructions.py --scene halves --start 200 --against /tmp/old_kernel.py
 
 Each kernel runs one thread under valgrind's callgrind, which counts only
 the frames from ``--start`` (stepped before counting) on; branches are
@@ -33,7 +33,8 @@ from pathlib import Path
 
 import click
 
-from sandmod.jobs import benchmark  # numpy, not numba
+from kernels import load_kernel, stepping_with  # numpy, not numba
+from sandmod.jobs import benchmark
 
 #: The two calls, through valgrind's client requests (no-ops when not under valgrind).
 _SWITCH_C = """
@@ -46,7 +47,7 @@ void counting_off(void) { CALLGRIND_STOP_INSTRUMENTATION; CALLGRIND_DUMP_STATS_A
 _EVENTS = ("Ir", "Bc", "Bcm", "Bi", "Bim")
 
 #: This sandmod's kernel, counted as a file like any other, so that both counts run the same Python.
-_THIS_KERNEL = str(Path(benchmark.__file__).with_name("kernel.py").resolve())
+_THIS_KERNEL = str((Path(benchmark.__file__).parent.parent / "engine" / "kernel.py").resolve())
 
 #: What valgrind cannot run, switched off in the code counted (the rest of AVX-512 and AMX need the first two).
 _NOT_UNDER_VALGRIND = ("avx512f", "amx-tile", "avxvnni")
@@ -121,7 +122,7 @@ def count(what: dict, kernel: str, folder: Path, env: dict[str, str]) -> Count:
     # stack starts moves what Python does between frames, by a few thousand instructions.
     job = folder / "job.json"
     job.write_text(json.dumps(dict(what, kernel=kernel, switch=str(folder / "switch.so"))), encoding="utf-8")
-    child = [sys.executable, "-m", "sandmod.tools.instructions", "--child", str(job)]
+    child = [sys.executable, __file__, "--child", str(job)]
     native = subprocess.run(child, env=env, capture_output=True, text=True)  # compiles, unless cached
     if native.returncode != 0:
         raise CannotCount(f"the frames did not run: {last_line(native.stderr)}")
@@ -164,16 +165,16 @@ def _child(job: dict) -> None:
     else:
         bench = benchmark.scene_bench(load_ruleset(None, []), job["scene"], job["size"])
     world = bench.make()
-    world.kernel = benchmark.load_kernel(job["kernel"])
-    for _ in range(job["start"]):
-        world.step()
-    switch = ctypes.CDLL(job["switch"])
-    gc.collect()
-    gc.disable()  # a collection would land in some counts and not in others
-    switch.counting_on()
-    for _ in range(job["frames"]):
-        world.step()
-    switch.counting_off()
+    with stepping_with(load_kernel(job["kernel"])):
+        for _ in range(job["start"]):
+            world.step()
+        switch = ctypes.CDLL(job["switch"])
+        gc.collect()
+        gc.disable()  # a collection would land in some counts and not in others
+        switch.counting_on()
+        for _ in range(job["frames"]):
+            world.step()
+        switch.counting_off()
     print(benchmark.state_digest(world))
 
 
@@ -212,7 +213,7 @@ def main(scene, world, size, start, frames, against, child) -> None:
         name, cells = f"{scene} {size}x{size}", size * size
     if against:
         try:
-            benchmark.load_kernel(against)  # before counting anything: is it a kernel at all?
+            load_kernel(against)  # before counting anything: is it a kernel at all?
         except ValueError as error:
             raise click.BadParameter(str(error), param_hint="'--against'") from None
     span = f"frames {start + 1}-{start + frames}" if frames > 1 else f"frame {start + 1}"

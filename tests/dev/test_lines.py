@@ -1,4 +1,4 @@
-"""``python -m sandmod.tools.lines``: how often each line of the kernel runs, the kernel run as Python."""
+"""``python tools/dev/lines.py``: how often each line of the kernel runs, the kernel run as Python."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 from click.testing import CliRunner
 
-from sandmod.tools import lines
+import lines
 
 
 def counted(args: list[str]) -> tuple[int, list[str]]:

@@ -1,14 +1,14 @@
 """Count how often each line of a kernel function runs: the paths a scene's cells take.
 
-:mod:`sandmod.tools.instructions` says what a stretch of frames costs; this
+:mod:`instructions` says what a stretch of frames costs; this
 says which way the cells went. It steps a scene or world natively to
 ``--start``, then runs the next ``--frames`` a second time from that state in
 a child process, through the kernel's own Python source (numba's
 ``NUMBA_DISABLE_JIT``) under a line tracer. It prints, for each line of the
 function that ran, how many times it did::
 
-    python -m sandmod.tools.lines --scene halves --start 500 --frames 2
-    python -m sandmod.tools.lines --scene mix --start 100 --min 5000 --from 470
+    python tools/dev/lines.py --scene halves --start 500 --frames 2
+    python tools/dev/lines.py --scene mix --start 100 --min 5000 --from 470
 
 ``step_region`` is counted per version, with the fast loop and without
 (``fast``), since each tile takes one or the other. The Python run must end
@@ -38,7 +38,7 @@ import click
 import numpy as np
 
 from sandmod.jobs import benchmark  # numpy, not numba
-from sandmod.tools.instructions import last_line
+from instructions import last_line
 
 #: The kernel functions worth counting (the ones a frame spends its time in).
 FUNCTIONS = ("step_region", "conduct", "explode")
@@ -158,7 +158,7 @@ def main(scene, world, size, start, frames, function, first, least, child) -> No
             native.step()
         (Path(scratch) / "job.json").write_text(json.dumps(job), encoding="utf-8")
         env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-        ran = subprocess.run([sys.executable, "-m", "sandmod.tools.lines", "--child", str(Path(scratch) / "job.json")], env=env, capture_output=True, text=True)
+        ran = subprocess.run([sys.executable, __file__, "--child", str(Path(scratch) / "job.json")], env=env, capture_output=True, text=True)
         if ran.returncode != 0:
             raise click.ClickException(f"the frames did not run as Python: {last_line(ran.stderr)}")
         result = json.loads(Path(job["out"]).read_text(encoding="utf-8"))
