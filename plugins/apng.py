@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from sandmod.hooks import hookimpl
-from sandmod.formats.recording import RecorderSpec, SavedAtClose
+from sandmod.api import RecorderSpec, SavedAtClose, hookimpl
 
 
 class ApngRecorder(SavedAtClose):

@@ -9,8 +9,8 @@ from typing import BinaryIO, Iterable, Iterator, Sequence
 
 import numpy as np
 
-from sandmod.hooks import hookimpl
-from sandmod.formats.recording import RecorderSpec, VideoSettings, palette_image
+from sandmod.api import RecorderSpec, VideoSettings, hookimpl, palette_image
+
 
 #: Browsers slow down GIF frames shorter than 20 ms, and delays are in 10 ms steps.
 MIN_DELAY_MS = 20

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sandmod.hooks import hookimpl
-from sandmod.formats.recording import RecorderSpec, VideoSettings, write_png
+from sandmod.api import RecorderSpec, VideoSettings, hookimpl, write_png
+
 
 #: The name of image number i (from 0) in the folder.
 NAME = "frame_{:05d}.png"

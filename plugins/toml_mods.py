@@ -5,8 +5,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from sandmod.hooks import hookimpl
-from sandmod.formats.tomlsource import TomlSource
+from sandmod.api import TomlSource, hookimpl
 
 
 def bundled_mods_dir() -> Path:

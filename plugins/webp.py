@@ -6,8 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sandmod.hooks import hookimpl
-from sandmod.formats.recording import RecorderSpec, SavedAtClose, VideoSettings
+from sandmod.api import RecorderSpec, SavedAtClose, VideoSettings, hookimpl
 
 
 class WebpRecorder(SavedAtClose):

@@ -39,7 +39,7 @@ def test_another_seed_gives_other_frames():
 
 
 def test_hash_is_the_same_in_python_numpy_and_numba():
-    from sandmod.engine.kernel import _mix32
+    from sandmod.engine.cells import _mix32
 
     values = [0, 1, 2, 12345, 0xFFFFFFFF, 0x9E3779B9, 2**31]
     python = [hashing.mix32(v) for v in values]

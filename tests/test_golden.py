@@ -17,7 +17,7 @@ from sandmod.world.world import World
 from test_chunks import digest
 
 #: (scene, side of the world): digest after 160 frames. The larger world has more cells than
-#: ``kernel.CACHED_CELLS``, so the kernel asks for rows ahead of their use there (a hint that must
+#: ``layout.CACHED_CELLS``, so the kernel asks for rows ahead of their use there (a hint that must
 #: change nothing). Recorded anew when fluids came to trade places by a chance that grows with
 #: their densities' gap (no more combs of alternating rows), reactions stopped ending the turn of a
 #: cell they leave as it was, liquids stopped flowing sideways over a drop, and rising gas wavers.
@@ -32,7 +32,7 @@ GOLDEN = {
 
 
 def test_one_world_is_too_large_for_the_cache():
-    from sandmod.engine.kernel import CACHED_CELLS
+    from sandmod.engine.layout import CACHED_CELLS
 
     assert 96 * 96 <= CACHED_CELLS < 272 * 272
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from conftest import write_mods
-from sandmod.engine.kernel import LOOSE, _line_point
+from sandmod.engine.cells import _line_point
+from sandmod.engine.layout import LOOSE
 from sandmod.world.loading import load_ruleset
 from sandmod.world.shapes import fill_mask
 from sandmod.engine.traversal import line_cells

@@ -253,7 +253,11 @@ class World:
     def paint_cells(
         self, ys: np.ndarray, xs: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT
     ) -> int:
-        """:meth:`paint` for cells given by their rows and columns."""
+        """:meth:`paint` for cells given by their rows and columns.
+
+        In numpy, so that a world file's scene is built without numba (``sandmod validate``
+        builds it): the cells become the new element as :func:`sandmod.engine.cells.become`
+        makes them in the kernel (``tests/test_painting.py`` holds the two equal)."""
         if only_empty:
             keep = self.cells[ys, xs] == 0
             ys, xs = ys[keep], xs[keep]
@@ -285,9 +289,8 @@ class World:
         t = self.ruleset.tables
         vx, vy = (_AT_REST, _AT_REST) if velocity is None else velocity
         return kernel.paint_cells(
-            self.state, np.asarray(ys, np.int64), np.asarray(xs, np.int64), element, cargo, vx, vy, only_empty,
+            self.state, t, np.asarray(ys, np.int64), np.asarray(xs, np.int64), element, cargo, vx, vy, only_empty,
             chance_threshold(chance), frame_key(self.seed, self.frame, salt), frame_key(self.seed, self.frame, SALT_SPAWN ^ salt),
-            int(t.life_frames[element]), int(t.life_jitter[element]), int(t.heat_cap[element]) * int(t.temp_start[element]),
             self.awake, self._even,
         )  # fmt: skip
 

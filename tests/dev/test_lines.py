@@ -14,30 +14,38 @@ def counted(args: list[str]) -> tuple[int, list[str]]:
     return result.exit_code, result.output.splitlines()
 
 
-def count_of(output: list[str], text: str) -> list[int]:
-    return [int(line.split()[0]) for line in output if line.endswith(text)]
+def calls_of(output: list[str], version: str) -> dict[str, int]:
+    """The calls of each engine function, from the report's line for one version of step_region."""
+    line = next(line for line in output if line.startswith(f"  {version}: calls "))
+    pairs = line.split(": calls ", 1)[1].split(", ")
+    return {name: int(n) for name, n in (pair.rsplit(" ", 1) for pair in pairs)}
 
 
-def test_the_python_run_reaches_the_compiled_kernels_frames_and_counts_each_cell():
+def test_the_python_run_reaches_the_compiled_kernels_frames_and_counts_each_call():
     # Frame 1 of halves at 64x64: one tile, which takes the fast loop on frame 1; every cell full.
     code, output = counted(["--scene", "halves", "--size", "64", "--start", "0", "--frames", "1"])
     assert code == 0, output
-    assert output[0] == "halves 64x64, frame 1, step_region, the kernel run as Python:"
+    assert output[0] == "halves 64x64, frame 1, the kernel run as Python:"
     assert output[-1] == "  the same frames as the compiled kernel"
-    # The fast loop looks at each of the 4096 cells once.
-    assert output[1].startswith("  with the fast loop: ")
-    assert count_of(output, "e = cells[_at(y, x)]") == [64 * 64]
+    fast = calls_of(output, "with the fast loop")
     # The bottom row of sand sinks into the water, each grain by its chance (0.56): the fast loop
     # moves the 33 of the 62 inner grains whose chance came up, and hands on the two at the world's
-    # edges to the full update.
-    assert count_of(output, "cells[_at(ty, x)] = e") == [33]
-    assert count_of(output, "cells[_at(py, px)] = e") == [2]
+    # edges to the full update, whose moves swap them and knock their neighbours.
+    assert fast["swap"] == 33 + 2 and fast["knock"] == 2
+    # The freshly painted grains are loose: the full update settles each (every one calm: ready for its move).
+    assert fast["_update_cell"] == fast["move"] == fast["settle"] > 64 * 30 and "heat_and_fire" not in fast
+    assert fast["step_region"] == 1
 
 
-def test_from_and_min_choose_the_lines_shown():
-    source = [f"line {n}" for n in range(1, 11)]
-    shown = lines._report({"False": {"2": 5, "4": 50, "8": 500}}, source, first=3, least=10)
-    assert shown == ["without the fast loop: 555 lines run", "        50     4  line 4", "       500     8  line 8"]
+def test_function_and_min_choose_the_lines_shown():
+    result = {
+        "calls": {"False": {"move": 3, "swap": 1}},
+        "lines": {"False": {"moves.py:move:2": 5, "moves.py:move:4": 50, "cells.py:swap:3": 500}},
+    }
+    sources = {"moves.py": [f"line {n}" for n in range(1, 11)], "cells.py": [f"cell {n}" for n in range(1, 11)]}
+    shown = lines._report(result, sources, "move", 10)
+    assert shown == ["without the fast loop: calls move 3, swap 1", "        50  moves.py:4     line 4"]
+    assert lines._report(result, sources, None, 1)[1:] == ["       500  cells.py:3     cell 3", "         5  moves.py:2     line 2", "        50  moves.py:4     line 4"]
 
 
 def test_frames_that_differ_from_the_compiled_kernels_are_said_and_exit_1(monkeypatch):

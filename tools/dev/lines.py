@@ -1,20 +1,20 @@
-"""Count how often each line of a kernel function runs: the paths a scene's cells take.
+"""Count how often each line of the kernel runs: the paths a scene's cells take.
 
-:mod:`instructions` says what a stretch of frames costs; this
-says which way the cells went. It steps a scene or world natively to
-``--start``, then runs the next ``--frames`` a second time from that state in
-a child process, through the kernel's own Python source (numba's
-``NUMBA_DISABLE_JIT``) under a line tracer. It prints, for each line of the
-function that ran, how many times it did::
+:mod:`instructions` says what a stretch of frames costs; this says which way
+the cells went. It steps a scene or world natively to ``--start``, then runs
+the next ``--frames`` a second time from that state in a child process,
+through the engine's own Python source (numba's ``NUMBA_DISABLE_JIT``) under
+a tracer. It prints how many times each engine function was called, and each
+line of the engine that ran, with how often::
 
     python tools/dev/lines.py --scene halves --start 500 --frames 2
-    python tools/dev/lines.py --scene mix --start 100 --min 5000 --from 470
+    python tools/dev/lines.py --scene mix --start 100 --min 5000 --function move
 
-``step_region`` is counted per version, with the fast loop and without
-(``fast``), since each tile takes one or the other. The Python run must end
-in the state the compiled kernel reaches from the same start; the tool
-checks, and says so (exit 1 where they differ). So the counts are those of
-the real frames. A 512x512 frame takes some ten seconds this way.
+The cells' update is counted per version of ``step_region``, with the fast
+loop and without (``fast``), since each tile takes one or the other. The
+Python run must end in the state the compiled kernel reaches from the same
+start; the tool checks, and says so (exit 1 where they differ). So the counts
+are those of the real frames. A 512x512 frame takes some ten seconds this way.
 
 The child changes three things so that the source runs as plain Python. It
 widens the tables and the world's arrays to int64, as numba's arithmetic
@@ -39,9 +39,6 @@ import numpy as np
 
 from sandmod.jobs import benchmark  # numpy, not numba
 from instructions import last_line
-
-#: The kernel functions worth counting (the ones a frame spends its time in).
-FUNCTIONS = ("step_region", "conduct", "explode")
 
 #: What a world carries from one frame to the next besides its cells (the rest is scratch).
 _CARRIED = ("awake", "_even", "_fast_gain")
@@ -70,56 +67,84 @@ def _make(job: dict):
     return bench.make()
 
 
-def _as_python(kernel) -> None:
-    """Make the kernel's source run as plain Python, to the same results (see the module's docstring)."""
-    kernel.prefetch = lambda array, y, x: None
-    kernel._within = lambda v, limit: 0 <= int(v) < int(limit)
-    kernel._inside = lambda x, y, width, height: 0 <= int(x) < int(width) and 0 <= int(y) < int(height)
+def _engine_modules() -> list:
+    import importlib
+    import pkgutil
+
+    from sandmod import engine
+
+    return [importlib.import_module(f"sandmod.engine.{m.name}") for m in pkgutil.iter_modules(engine.__path__)]
+
+
+def _as_python() -> None:
+    """Make the engine's source run as plain Python, to the same results (see the module's docstring)."""
+    for module in _engine_modules():
+        for name, plain in (
+            ("prefetch", lambda array, y, x: None),
+            ("_within", lambda v, limit: 0 <= int(v) < int(limit)),
+            ("_inside", lambda x, y, width, height: 0 <= int(x) < int(width) and 0 <= int(y) < int(height)),
+        ):
+            if hasattr(module, name):
+                setattr(module, name, plain)
 
 
 def _child(job: dict) -> None:
-    """Without numba: step the frames from the saved state under a line tracer; write the counts and digest."""
-    from sandmod.engine import kernel
-
-    _as_python(kernel)
+    """Without numba: step the frames from the saved state under a tracer; write the counts and digest."""
+    _as_python()
     world = _make(job)
     world.tables = world.tables._replace(**{name: np.asarray(table).astype(np.int64) for name, table in world.tables._asdict().items()})
     _restore(world, Path(job["state"]))
     kinds = [array.dtype for array in world.state]
     world.state = type(world.state)(*(array.astype(np.int64) for array in world.state))
-    code = getattr(kernel, job["function"]).__code__
-    counts: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    engine = str(Path(_engine_modules()[0].__file__).parent)
+    lines: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)  # version -> "file:function:line" -> runs
+    calls: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)  # version -> function -> calls
+    version = ["all"]  # the fast loop's, of the step_region running
 
-    def calls(frame, event, arg):
-        if frame.f_code is not code:
+    def each_call(frame, event, arg):
+        code = frame.f_code
+        if not code.co_filename.startswith(engine):
             return None
-        lines = counts[str(frame.f_locals.get("fast", "all"))]
+        if code.co_name == "step_region":
+            version[0] = str(frame.f_locals.get("fast"))
+        calls[version[0]][code.co_name] += 1
+        where = f"{Path(code.co_filename).name}:{code.co_name}:"
 
         def each_line(frame, event, arg):
             if event == "line":
-                lines[frame.f_lineno] += 1
+                lines[version[0]][where + str(frame.f_lineno)] += 1
             return each_line
 
         return each_line
 
-    sys.settrace(calls)
+    sys.settrace(each_call)
     try:
         for _ in range(job["frames"]):
             world.step()
     finally:
         sys.settrace(None)
     world.state = type(world.state)(*(array.astype(kind) for array, kind in zip(world.state, kinds)))
-    Path(job["out"]).write_text(json.dumps({"digest": benchmark.state_digest(world), "counts": counts}), encoding="utf-8")
+    result = {"digest": benchmark.state_digest(world), "lines": lines, "calls": calls}
+    Path(job["out"]).write_text(json.dumps(result), encoding="utf-8")
 
 
-def _report(counts: dict[str, dict[str, int]], source: list[str], first: int, least: int) -> list[str]:
+def _report(result: dict, sources: dict[str, list[str]], function: str | None, least: int) -> list[str]:
+    """For each version: the calls of each function, and the lines run (of ``function``, or all) at least ``least`` times."""
     out = []
-    for version in sorted(counts):
-        lines = {int(n): c for n, c in counts[version].items()}
-        label = {"True": "with the fast loop", "False": "without the fast loop"}.get(version, "")
-        out.append(f"{label or 'all calls'}: {sum(lines.values())} lines run")
-        out.extend(f"{c:10d} {n:5d}  {source[n - 1].strip()[:100]}" for n, c in sorted(lines.items()) if n >= first and c >= least)
+    for version in sorted(result["calls"]):
+        label = {"True": "with the fast loop", "False": "without the fast loop"}.get(version, "outside the cells' update")
+        counted = result["calls"][version]
+        out.append(f"{label}: calls " + ", ".join(f"{name} {n}" for name, n in sorted(counted.items(), key=lambda item: -item[1])))
+        for where, runs in sorted(result["lines"].get(version, {}).items(), key=lambda item: _place(item[0])):
+            file, name, line = where.split(":")
+            if runs >= least and function in (None, name):
+                out.append(f"{runs:10d}  {file}:{line:<5} {sources[file][int(line) - 1].strip()[:100]}")
     return out
+
+
+def _place(where: str) -> tuple[str, int]:
+    file, _, line = where.split(":")
+    return file, int(line)
 
 
 @click.command()
@@ -128,19 +153,17 @@ def _report(counts: dict[str, dict[str, int]], source: list[str], first: int, le
 @click.option("--size", default=512, show_default=True, type=click.IntRange(16, 2048), help="The scene's width and height.")
 @click.option("--start", default=200, show_default=True, type=click.IntRange(0), help="Frames stepped (compiled) before counting.")
 @click.option("--frames", default=1, show_default=True, type=click.IntRange(1), help="Frames counted.")
-@click.option("--function", "function", default="step_region", show_default=True, type=click.Choice(FUNCTIONS))
-@click.option("--from", "first", default=1, show_default=True, type=click.IntRange(1), help="Show lines from this line number on.")
+@click.option("--function", "function", help="Show the lines of this engine function only (default: every one).")
 @click.option("--min", "least", default=1, show_default=True, type=click.IntRange(1), help="Show lines run at least this often.")
 @click.option("--child", hidden=True)
-def main(scene, world, size, start, frames, function, first, least, child) -> None:
-    """Count how often each line of a kernel function runs over some frames (the kernel run as Python)."""
+def main(scene, world, size, start, frames, function, least, child) -> None:
+    """Count the engine's calls and lines over some frames (the kernel run as Python)."""
     if child:
         _child(json.loads(Path(child).read_text(encoding="utf-8")))
         return
-    from sandmod.engine import kernel
     from sandmod.errors import ProblemsError
 
-    job = dict(scene=scene, world=world, size=size, frames=frames, function=function)
+    job = dict(scene=scene, world=world, size=size, frames=frames)
     try:
         native = _make(job)
     except ProblemsError as error:
@@ -162,9 +185,9 @@ def main(scene, world, size, start, frames, function, first, least, child) -> No
         if ran.returncode != 0:
             raise click.ClickException(f"the frames did not run as Python: {last_line(ran.stderr)}")
         result = json.loads(Path(job["out"]).read_text(encoding="utf-8"))
-    click.echo(f"{name}, {span}, {function}, the kernel run as Python:")
-    source = Path(kernel.__file__).read_text(encoding="utf-8").splitlines()
-    for line in _report(result["counts"], source, first, least):
+    click.echo(f"{name}, {span}, the kernel run as Python:")
+    sources = {Path(m.__file__).name: Path(m.__file__).read_text(encoding="utf-8").splitlines() for m in _engine_modules()}
+    for line in _report(result, sources, function, least):
         click.echo("  " + line)
     if result["digest"] != benchmark.state_digest(native):
         click.echo("  OTHER FRAMES than the compiled kernel's: these counts are not the real frames'", err=True)

@@ -26,7 +26,7 @@ from numba import njit, prange
 
 from kernels import _KernelRun, in_turns, saved
 from sandmod.engine.hashing import SALT_MOVE, frame_key
-from sandmod.engine.kernel import _at, _mix32, _within  # unsigned indices: numba's wrap-around would cost a quarter
+from sandmod.engine.cells import _at, _mix32, _within  # unsigned indices: numba's wrap-around would cost a quarter
 from sandmod.jobs.benchmark import Bench
 
 

@@ -1,0 +1,449 @@
+"""Phase 4 of a cell's update, movement: the archetypes' moves, the walk along the line traversal,
+the new velocity, and what a move does to its neighbours.
+
+Movers (powders, liquids, gases) carry a velocity in 1/256ths of a cell per
+frame. While the cell below (above, for rising gases) is open they fall,
+accelerating by their gravity up to their terminal speed, and drift by their
+sideways speed (:func:`falling_moves`). On the ground a loose powder grain
+turns its landing speed into sideways speed, rolls or slides, and loses speed
+to friction until it rests (:func:`powder_moves`); a resting grain moves
+again when the cell below opens or a moving neighbour knocks it loose
+(:func:`knock`). Liquids and gases on the ground flow sideways up to their
+dispersion (:func:`fluid_moves`). Particles fly by their velocity through
+empty cells and put down what they carry where they hit something
+(:func:`particle_moves`, :func:`land`).
+
+Every move of more than one cell walks the line traversal (:func:`walk`) and
+stops at the first cell it may not enter: only the first cell of a move may
+be a fluid to swap with (the move ends there), the others must be empty, and
+a diagonal step needs one of its two side cells open, so nothing passes
+through a wall or between two corners.
+
+A new archetype takes a code in :data:`sandmod.engine.layout.ARCHETYPES`, a
+chooser of moves here, and a branch for it in :func:`move`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .cells import (
+    DONE,
+    GAS,
+    LIQUID,
+    MOVED,
+    PARTICLE,
+    POWDER,
+    STATIC,
+    CARRIED,
+    _at,
+    _bit,
+    _cell_key,
+    _cells_moved,
+    _clamped,
+    _energy,
+    _enterable,
+    _inside,
+    _line_point,
+    _mix32,
+    _scaled,
+    _spawn_state,
+    _temperature,
+    _within,
+    swap,
+)
+from .chunks import _unvisited
+from .heat import stirs
+from .jit import compiled, inlined
+from .layout import ALWAYS, BURNING, FLAMMABLE, IGNITES, LOOSE, SUBCELL
+
+# Powder on landing: its impact_share of the landing speed becomes sideways
+# speed, and at least MIN_SLIDE; sideways speed below STOP_SPEED comes to rest.
+MIN_SLIDE = SUBCELL // 4
+STOP_SPEED = SUBCELL // 8
+KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
+SALT_ROUND = 0x165667B1
+OPEN, SHUT, WAIT = 0, 1, 2  # a move's first cell (see _way_into): go; no; not this frame, try again
+
+
+@compiled
+def _restless(f, th, life, energy, cold, hot, ignite):
+    """Has a cell's own update work to do this frame: burning, a lifetime, a flame, or a
+    phase change or a fire due (its flags, thermal bits, lifetime, heat and limits)?"""
+    if (f & BURNING) != 0 or life != 0 or (th & IGNITES) != 0:
+        return True
+    return th != 0 and (energy < cold or energy > hot or ((th & FLAMMABLE) != 0 and energy >= ignite))
+
+
+@compiled
+def _way_into(kind, threshold, o, o_kind, o_flags, o_energy, o_thermal, o_life, o_cold, o_hot, o_ignite, level, moving, roll_key, x, y, qx, qy, forward, x0, y0, x1, y1, frame):
+    """May a mover of archetype ``kind`` at (x, y), on its turn, go into (qx, qy), the first cell of a move,
+    which holds ``o`` (its archetype, flags, heat energy, thermal bits, lifetime and heat limits)?
+
+    OPEN, SHUT, or WAIT: not this frame, but maybe on a later one (its region
+    stays awake). ``threshold`` is the mover's chance against ``o``
+    (``Tables.displace``, not 0); one roll a frame under ``roll_key`` decides
+    it for every move of the mover, so they agree. Into an empty cell: yes,
+    but a gas at rest (not ``moving``) starts to rise or sink through the air
+    only by the chance. Into a fluid: not one done this frame; ``level``
+    (sideways), a liquid or gas trades places only with its own kind, and
+    freely (one flowing into the other would move neither up nor down); not
+    one still to have its own update this frame with work in it (no cell is
+    moved out of its heat, fire or lifetime); up or down, by the chance.
+    """
+    fluid = kind == LIQUID or kind == GAS
+    if o == 0:
+        if threshold == ALWAYS or moving or level:
+            return OPEN
+    else:
+        if (o_flags & DONE) != 0 or (level and fluid and o_kind != kind):
+            return SHUT
+        if _unvisited(qx, qy, x, y, forward, x0, y0, x1, y1, frame) and _restless(o_flags, o_thermal, o_life, o_energy, o_cold, o_hot, o_ignite):
+            return WAIT
+        if threshold == ALWAYS or (level and fluid):
+            return OPEN
+    return OPEN if (_cell_key(roll_key, x, y) >> 24) < threshold else WAIT
+
+
+@inlined
+def _way_into_cell(s, t, kind, threshold, qx, qy, level, moving, roll_key, x, y, forward, x0, y0, x1, y1, frame):
+    """:func:`_way_into` for the cell at (qx, qy), read from the world and the tables."""
+    o = s.cells[_at(qy, qx)]
+    return _way_into(
+        kind, threshold, o, t.archetype[o], s.flags[_at(qy, qx)], s.heat[_at(qy, qx)], t.thermal[o], t.life_frames[o], t.cold_limit[o],
+        t.hot_limit[o], t.ignite_limit[o], level, moving, roll_key, x, y, qx, qy, forward, x0, y0, x1, y1, frame,
+    )
+
+
+@compiled
+def _fluid_move_cell(x, y, g, k):
+    """The first cell of a liquid's or gas's move k (0: on, 1 and 2: on and to a side, 3 and 4: to a side)."""
+    return x + (0, 1, -1, 1, -1)[k], y + (g if k < 3 else 0)
+
+
+@inlined
+def fluid_near(cells, x, y, g):
+    """The mask of the elements in the first cells of a liquid's or gas's five moves."""
+    height, width = cells.shape
+    near = 0
+    for k in range(5):
+        nx, ny = _fluid_move_cell(x, y, g, k)
+        if _inside(nx, ny, width, height):
+            near |= _bit(cells[_at(ny, nx)])
+    return near
+
+
+@compiled
+def particle_moves(h, accel, keep, max_speed, cvx, cvy):
+    """A particle in flight: gravity, drag (``keep`` of 256 kept), its speed clamped; the move is
+    its velocity rounded to cells. Returns the move (dx, dy) and the new velocity."""
+    r = _mix32(h ^ SALT_ROUND)  # rolls for rounding speeds to cells
+    cvy += accel
+    if keep != 256:
+        cvx = _scaled(cvx, keep)
+        cvy = _scaled(cvy, keep)
+    cvx = _clamped(cvx, max_speed)
+    cvy = _clamped(cvy, max_speed)
+    return _cells_moved(cvx, r & 255), _cells_moved(cvy, (r >> 8) & 255), cvx, cvy
+
+
+@compiled
+def falling_moves(h, kind, g, accel, max_speed, cvx, cvy):
+    """Falling (rising): speed up, go at least one cell, drift sideways (a gas wavers as it rises:
+    a plume, not a line). Returns the first move (dx, dy) and the new vertical velocity; the
+    second move, if the drift is blocked, is straight on, one cell."""
+    r = _mix32(h ^ SALT_ROUND)
+    speed = min(cvy * g + accel, max_speed)
+    dx = _cells_moved(cvx, (r >> 8) & 255)
+    if kind == GAS and (r & 0x10000) != 0:
+        dx += 1 if (r & 0x20000) != 0 else -1
+    return dx, g * max(1, _cells_moved(speed, r & 255)), speed * g
+
+
+@compiled
+def powder_moves(h, g, impact_share, max_speed, cvx, cvy):
+    """A loose grain on the ground: landing turns its speed sideways, and it rolls down a slope,
+    slides along the ground, or rolls down the other side. Returns (tries, d0x, d0y, d1x, d2x,
+    d2y, vx, coasting): coasting, too slow to cross a cell this frame, it tries the first only."""
+    u = abs(cvx)
+    side = (1 if cvx > 0 else -1) if cvx != 0 else (1 if h & 1 else -1)
+    impact = cvy * g
+    if impact > 0 or u == 0:  # landing, or freshly placed
+        u = min(max(u + ((impact * impact_share) >> 8), MIN_SLIDE), max_speed)
+    if u < STOP_SPEED:
+        return 0, 0, 0, 0, 0, 0, side * u, False
+    slide = _cells_moved(u, _mix32(h ^ SALT_ROUND) & 255)
+    coasting = slide == 0
+    return (1 if coasting else 3), side, g, side * slide, -side, g, side * u, coasting
+
+
+@compiled
+def fluid_moves(h, kind, g, can_flow, rest_chance, dispersion):
+    """A liquid or gas on the ground: down a side, else flow sideways up to its dispersion; a viscous
+    liquid often rests. Returns (tries, d0x, d0y, d1x, d1y, d2x, d3x, busy)."""
+    if can_flow and kind == LIQUID and (h >> 8) < rest_chance:
+        return 0, 0, 0, 0, 0, 0, 0, True  # it rests; it stays awake while it could flow
+    if not can_flow:
+        return 0, 0, 0, 0, 0, 0, 0, False
+    side = 1 if h & 1 else -1
+    reach = int(dispersion)
+    return (4 if reach > 0 else 2), side, g, -side, g, side * reach, -side * reach, False
+
+
+@inlined
+def walk(s, t, x, y, e, kind, g, tries, d0x, d0y, d1x, d1y, d2x, d2y, d3x, d3y, moving, exchange_key, forward, x0, y0, x1, y1, frame):
+    """Walk each of the ``tries`` moves along the line traversal; the first that gets anywhere wins.
+    Returns where it got (px, py), whether it hit something, which move it used (-1: none), and
+    whether a cell in its way may open on a later frame."""
+    cells, displace, archetype = s.cells, t.displace, t.archetype
+    height, width = cells.shape
+    fluid = kind == LIQUID or kind == GAS
+    free_air = kind != GAS
+    only_empty = kind == PARTICLE
+    px = x
+    py = y
+    hit = False
+    used = -1
+    waits = False
+    for a in range(tries):
+        if a == 0:
+            dx, dy = d0x, d0y
+        elif a == 1:
+            dx, dy = d1x, d1y
+        elif a == 2:
+            dx, dy = d2x, d2y
+        else:
+            dx, dy = d3x, d3y
+        steps = max(abs(dx), abs(dy))
+        hit = False
+        for k in range(1, steps + 1):
+            qx, qy = _line_point(x, y, dx, dy, steps, k)
+            if not _inside(qx, qy, width, height):
+                hit = True
+                break
+            o = cells[_at(qy, qx)]
+            if k == 1 and not only_empty and (o != 0 or not free_air):
+                threshold = displace[e, o]
+                if threshold == 0:
+                    break
+                if not (o == 0 and threshold == ALWAYS):
+                    way = _way_into_cell(s, t, kind, threshold, qx, qy, qy == y, moving, exchange_key, x, y, forward, x0, y0, x1, y1, frame)
+                    if way != OPEN:
+                        waits = waits or way == WAIT
+                        break
+            elif o != 0:
+                hit = archetype[o] != PARTICLE  # particles in a swarm wait for each other
+                break
+            if qx != px and qy != py:  # a diagonal step: one of its side cells must be open
+                c1 = cells[_at(py, qx)]
+                c2 = cells[_at(qy, px)]
+                if only_empty:
+                    side_open = c1 == 0 or c2 == 0
+                    hit = archetype[c1] != PARTICLE and archetype[c2] != PARTICLE
+                else:
+                    side_open = displace[e, c1] != 0 or displace[e, c2] != 0
+                    hit = True
+                if not side_open:
+                    break
+                hit = False
+            px = qx
+            py = qy
+            if o != 0:
+                break  # swapped into a fluid: the move ends there
+            if dy == 0 and fluid and _within(qy + g, height) and cells[_at(qy + g, qx)] == 0:
+                break  # flowing sideways over a drop: it falls from here
+        if px != x or py != y:
+            used = a
+            break
+    return px, py, hit, used, waits
+
+
+@compiled
+def settle(kind, falling, coasting, hit, tries, used, entered, x, y, px, py, cvx, cvy, loose, accel, friction, max_speed):
+    """The mover's velocity and LOOSE bit after its walk: a particle that hit something (or stopped)
+    lands; a fall into a fluid is slowed to a crawl, a blocked drift stops; friction brakes a grain
+    every frame of contact, rolling down a step gains speed, and a slow grain comes to rest."""
+    if kind == PARTICLE:
+        if hit or (tries == 0 and cvx == 0 and cvy == 0):
+            loose = LOOSE  # it lands: what it carries takes its place, moving as it flew
+    elif falling:
+        if entered != 0:
+            cvx = cvy = 0
+        elif used == 1:
+            cvx = 0
+    elif kind == POWDER:
+        u = abs(cvx) - _scaled(accel, friction) + (accel if py != y else 0)
+        if (used < 0 and not coasting) or u < STOP_SPEED or entered != 0:
+            loose = 0  # at rest (it may have moved this frame)
+            cvx = 0
+        else:
+            cvx = (1 if (px > x or (px == x and cvx > 0)) else -1) * min(u, max_speed)
+    return cvx, cvy, loose
+
+
+@inlined
+def land(s, t, x, y, e, spawn_key):
+    """A particle landed at (x, y): what it carries takes its place (or nothing), at the particle's
+    temperature, moving as it flew; where the particle's own clock ran, the cargo's starts.
+    Returns the cargo's bit."""
+    into = s.carry[_at(y, x)]
+    s.cells[_at(y, x)] = into
+    s.carry[_at(y, x)] = 0
+    s.heat[_at(y, x)] = _energy(_temperature(int(s.heat[_at(y, x)]), t.heat_recip[e]), t.heat_cap[into])
+    if into == 0:
+        s.vx[_at(y, x)] = s.vy[_at(y, x)] = 0
+    elif t.life_frames[e] != 0:
+        _, s.timer[_at(y, x)] = _spawn_state(_cell_key(spawn_key, x, y), t.life_frames[into], t.life_jitter[into])
+    return _bit(into)
+
+
+@inlined
+def knock(s, t, x, y, px, py, knock_key):
+    """A move from (x, y) to (px, py) knocks resting grains loose, each by its chance: those that
+    could follow into the vacated cell (pushed towards it) and those beside the arrival (pushed away)."""
+    cells, flags = s.cells, s.flags
+    height, width = cells.shape
+    if (
+        x > 0
+        and y > 0
+        and px > 0
+        and x + 1 < width
+        and px + 1 < width
+        and (
+            flags[_at(y, x - 1)] & flags[_at(y, x + 1)] & flags[_at(y - 1, x - 1)] & flags[_at(y - 1, x + 1)]
+            & flags[_at(py, px - 1)] & flags[_at(py, px + 1)] & LOOSE
+        )
+        != 0
+    ):
+        return  # all six are in motion already (the common case)
+    for k in range(6):
+        if k < 4:
+            nx = x + (-1, 1, -1, 1)[k]
+            ny = y - (0, 0, 1, 1)[k]
+            push = (1, -1, 1, -1)[k]
+        else:
+            nx = px + (-1, 1)[k - 4]
+            ny = py
+            push = (-1, 1)[k - 4]
+        if not _inside(nx, ny, width, height):
+            continue
+        if (flags[_at(ny, nx)] & LOOSE) != 0:
+            continue  # already in motion (fluids stay loose)
+        c = cells[_at(ny, nx)]
+        if t.knock_chance[c] != 0:  # only powders have a chance
+            if (_cell_key(knock_key, nx, ny) >> 8) < t.knock_chance[c]:
+                flags[_at(ny, nx)] |= LOOSE
+                s.vx[_at(ny, nx)] = push * KNOCK_SPEED
+
+
+@inlined
+def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, forward, x0, y0, x1, y1, frame, ambient):
+    """Phase 4: choose up to four moves by the archetype, walk them, settle the velocity, and swap.
+    Returns (busy, stir, born, px, py): as the other phases' (see :mod:`.fire`), and where the
+    mover ended up."""
+    cells, vx, vy, flags = s.cells, s.vx, s.vy, s.flags
+    height, width = cells.shape
+    kind = t.archetype[e]
+    if kind == STATIC:
+        return False, False, np.int64(0), x, y
+    old_vx = int(vx[_at(y, x)])
+    old_vy = int(vy[_at(y, x)])
+    g = t.fall_dir[e]
+    ty = y + g  # the cell it falls (rises) into
+    fluid = kind == LIQUID or kind == GAS
+    displaces = t.displaces[e]
+    if fluid and old_vx == 0 and old_vy == 0:
+        # At rest, first a cheap test of its five moves' cells: holds none an element it may displace?
+        # Then it stays put, as most of a body of liquid does.
+        if (displaces & present) == 0 or (displaces & fluid_near(cells, x, y, g)) == 0:
+            return False, False, np.int64(0), x, y
+    busy = False
+    opens = False
+    if kind != PARTICLE and _within(ty, height):
+        o = cells[_at(ty, x)]
+        threshold = t.displace[e, o]
+        opens = o == 0 and kind != GAS  # the commonest case, decided at once (a gas rises through air by a roll)
+        if not opens and threshold != 0:
+            way = _way_into_cell(s, t, kind, threshold, x, ty, False, old_vy != 0, exchange_key, x, y, forward, x0, y0, x1, y1, frame)
+            opens = way == OPEN
+            if way == WAIT:
+                busy = True
+                if kind == POWDER:
+                    return busy, False, np.int64(0), x, y  # a grain waits for its chance to sink (fluids flow aside meanwhile)
+    can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
+    if fluid and not opens and (displaces & present) != 0:
+        for k in range(1, 5):  # the cells fluid_near looks at, less the one below
+            nx, ny = _fluid_move_cell(x, y, g, k)
+            if _inside(nx, ny, width, height) and _enterable(t.displace[e, cells[_at(ny, nx)]], cells[_at(ny, nx)], flags[_at(ny, nx)]):
+                can_flow = True
+                break
+        if not can_flow and old_vx == 0 and old_vy == 0:
+            return busy, False, np.int64(0), x, y  # at rest, every move shut (by cells done this frame)
+    # Straight into a fluid below: one cell, where its speed is lost anyway; no rolls needed.
+    straight = opens and old_vx == 0 and cells[_at(ty, x)] != 0
+    h = 0 if straight else _cell_key(move_key, x, y)
+    cvx, cvy = old_vx, old_vy
+    loose = flags[_at(y, x)] & LOOSE
+    falling = coasting = False
+    tries = d0x = d0y = d1x = d1y = d2x = d2y = d3x = d3y = 0
+    if kind == PARTICLE:
+        busy = True  # in flight until it lands
+        loose = 0  # set when it lands
+        d0x, d0y, cvx, cvy = particle_moves(h, t.accel[e], t.drag_keep[e], t.max_speed[e], cvx, cvy)
+        tries = 1 if d0x != 0 or d0y != 0 else 0
+    elif opens:
+        falling = True
+        loose = LOOSE
+        if straight:
+            d0y = g
+        else:
+            d0x, d0y, cvy = falling_moves(h, kind, g, t.accel[e], t.max_speed[e], cvx, cvy)
+            d1y = g  # if the drift is blocked: straight on, one cell
+            tries = 2
+    elif g > 0 and cvy > 0 and _within(ty, height) and vy[_at(ty, x)] > 0 and t.archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
+        return True, False, np.int64(0), x, y  # the cell below falls too and has not had its turn (another tile's): wait for it
+    elif kind == POWDER:
+        if loose == 0:
+            return busy, False, np.int64(0), x, y  # resting: stays put until the cell below opens or it is knocked
+        tries, d0x, d0y, d1x, d2x, d2y, cvx, coasting = powder_moves(h, g, t.impact_share[e], t.max_speed[e], cvx, cvy)
+        cvy = 0
+    else:
+        cvx = cvy = 0
+        tries, d0x, d0y, d1x, d1y, d2x, d3x, rests = fluid_moves(h, kind, g, can_flow, t.rest_chance[e], t.dispersion[e])
+        busy = busy or rests
+
+    if falling and d0x == 0 and d0y == g:  # one cell straight on, into the cell found open above
+        px, py, hit, used = x, ty, False, 0
+    else:
+        px, py, hit, used, waits = walk(s, t, x, y, e, kind, g, tries, d0x, d0y, d1x, d1y, d2x, d2y, d3x, d3y, old_vy != 0, exchange_key, forward, x0, y0, x1, y1, frame)
+        busy = busy or waits
+    entered = cells[_at(py, px)]  # what the mover swaps with (0 when it goes into empty)
+    cvx, cvy, loose = settle(kind, falling, coasting, hit, tries, used, entered, x, y, px, py, cvx, cvy, loose, t.accel[e], t.friction[e], t.max_speed[e])
+
+    if used < 0 and not (kind == PARTICLE and loose != 0):  # it stays: only its velocity and LOOSE bit change
+        if cvx != old_vx or cvy != old_vy:
+            vx[_at(y, x)] = cvx
+            vy[_at(y, x)] = cvy
+            busy = True
+        if kind == POWDER and (flags[_at(y, x)] & LOOSE) != loose:
+            flags[_at(y, x)] ^= LOOSE
+            busy = True
+        return busy or (kind == POWDER and loose != 0), False, np.int64(0), x, y  # a loose grain is still in motion
+
+    stir = False
+    born = np.int64(0)
+    marks = flags[_at(y, x)] & (CARRIED & ~LOOSE)  # what travels with the mover besides LOOSE
+    if px != x or py != y:
+        # Heat stays even where two cells of one temperature trade places and neither cools.
+        stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(py, px)]), t.heat_cap[entered], t.cooling[entered], ambient)
+        swap(s, x, y, px, py, kind == PARTICLE)
+    vx[_at(py, px)] = cvx
+    vy[_at(py, px)] = cvy
+    flags[_at(py, px)] = MOVED | loose | marks
+    if kind == PARTICLE:
+        if loose != 0:  # landed
+            born = land(s, t, px, py, e, spawn_key)
+            stir = True
+    else:
+        knock(s, t, x, y, px, py, knock_key)
+    return True, stir, born, px, py

@@ -1,0 +1,91 @@
+"""Phases 2 and 3 of a cell's update: its lifetime runs out, or it reacts with a touching neighbour.
+
+Each returns ``(done, busy, stir, born)`` as the phases of :mod:`.fire` do.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .cells import FRESH, MOVED, _at, _bit, _cell_key, _inside, _mix32, _temperature, become
+from .jit import inlined
+from .layout import BURNING, REACTED
+
+
+@inlined
+def lifetime(s, t, x, y, e, spawn_key):
+    """Phase 2: a cell with a lifetime counts down, and at zero becomes its ``life_into`` (not while burning)."""
+    if t.life_frames[e] == 0 or (s.flags[_at(y, x)] & BURNING) != 0:
+        return False, False, False, np.int64(0)
+    left = s.timer[_at(y, x)]
+    if left <= 1:
+        into = t.life_into[e]
+        temperature = _temperature(int(s.heat[_at(y, x)]), t.heat_recip[e])
+        born = become(s, t, x, y, into, temperature, (s.flags[_at(y, x)] & FRESH) | MOVED, _cell_key(spawn_key, x, y))
+        return True, True, True, born
+    s.timer[_at(y, x)] = left - 1
+    return False, True, False, np.int64(0)
+
+
+@inlined
+def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
+    """Phase 3: try each touching neighbour once, in a hashed order, for a reaction; the first that
+    comes up turns both cells into its products, warmed by its heat, and marks both REACTED (once
+    a frame). Done if the cell became another element; one the reaction left as it was goes on to move.
+
+    First a cheap test: does any neighbour's bit show in the element's partner mask (``present``:
+    the elements that may be next to it)?
+    """
+    cells, flags, heat = s.cells, s.flags, s.heat
+    height, width = cells.shape
+    partners = t.reactive[e] & present
+    if partners != 0 and (flags[_at(y, x)] & REACTED) != 0:
+        partners = 0  # once a frame
+    if partners != 0:
+        near = 0
+        if x + 1 < width:
+            near |= _bit(cells[_at(y, x + 1)])
+        if y + 1 < height:
+            near |= _bit(cells[_at(y + 1, x)])
+        if x > 0:
+            near |= _bit(cells[_at(y, x - 1)])
+        if y > 0:
+            near |= _bit(cells[_at(y - 1, x)])
+        partners &= near
+    busy = stir = False
+    born = np.int64(0)
+    if partners == 0:
+        return False, busy, stir, born
+    start = (_cell_key(move_key, x, y) >> 1) & 3
+    for k in range(4):
+        d = (start + k) & 3
+        nx = x + (1, 0, -1, 0)[d]
+        ny = y + (0, 1, 0, -1)[d]
+        if not _inside(nx, ny, width, height) or (flags[_at(ny, nx)] & REACTED) != 0:
+            continue
+        b = cells[_at(ny, nx)]
+        threshold = t.react_chance[e, b]
+        if threshold == 0:
+            continue
+        # One roll per touching pair and frame, the same whichever cell looks.
+        roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
+        ta = _temperature(int(heat[_at(y, x)]), t.heat_recip[e])
+        tb = _temperature(int(heat[_at(ny, nx)]), t.heat_recip[b])
+        if ta + tb < t.react_tsum_min[e, b] or ta + tb > t.react_tsum_max[e, b]:
+            continue
+        busy = True  # it reacts now, or may on a later frame
+        if roll >= threshold:
+            continue
+        into_a = t.react_into_a[e, b]
+        into_b = t.react_into_b[e, b]
+        warm = t.react_heat[e, b]
+        if into_a != e:
+            born |= become(s, t, x, y, into_a, ta + warm, (flags[_at(y, x)] & FRESH) | MOVED, _cell_key(spawn_key, x, y))
+            stir = True
+        if into_b != b:
+            born |= become(s, t, nx, ny, into_b, tb + warm, (flags[_at(ny, nx)] & FRESH) | MOVED, _cell_key(spawn_key, nx, ny))
+            stir = True
+        flags[_at(y, x)] |= REACTED
+        flags[_at(ny, nx)] |= REACTED
+        return into_a != e, busy, stir, born
+    return False, busy, stir, born
