@@ -1,13 +1,14 @@
 """sandmod: a falling-sand engine in which every element is data.
 
-The engine's parts, each a small module:
+Its parts follow the data, each package importing only those before it
+(docs/ARCHITECTURE.md has the map):
 
-- :mod:`sandmod.formats.modspec`, :mod:`sandmod.formats.worldspec`: the file formats (pydantic models);
-- :mod:`sandmod.rules.modset`: find, validate and order mods;
-- :mod:`sandmod.rules.compiler`: mods to numpy tables;
-- :mod:`sandmod.world.world`, :mod:`sandmod.engine.kernel`: the state and the numba step;
-- :mod:`sandmod.hooks`, :mod:`sandmod.registry`: the plugin API;
-- :mod:`sandmod.world.loading`, :mod:`sandmod.jobs.render`: files in, animations out.
+- :mod:`sandmod.formats`: the files (TOML, the pydantic models of mods and worlds, pictures);
+- :mod:`sandmod.rules`: mods found, ordered and compiled into numpy tables;
+- :mod:`sandmod.engine`: the numba kernel and its phases, which imports nothing above it;
+- :mod:`sandmod.world`: the world's state, stepping and painting, built from a world file;
+- :mod:`sandmod.jobs`: what the commands run (render, validate, tests, bench);
+- :mod:`sandmod.hooks`, :mod:`sandmod.registry`: the plugin hooks, beside them.
 
 The public API is what this package gives (plugin authors: :mod:`sandmod.api`)::
 

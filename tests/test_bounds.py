@@ -1,7 +1,7 @@
 """The kernel never reads or writes outside the world.
 
 The cell update indexes the world's arrays with unsigned integers
-(``kernel._at``), for which numba does not wrap negative indices around: a
+(``cells._at``), for which numba does not wrap negative indices around: a
 coordinate that slipped below zero would touch memory outside the array
 instead of the far edge. So the busiest scenes and the example worlds that
 throw cells against the edges run here once with numba's bounds checks

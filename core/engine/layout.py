@@ -1,8 +1,7 @@
 """The facts the kernel is compiled with: the cell's flag bits, chunks and tiles, fixed-point
 units, archetype codes and the encodings of the compiled tables.
 
-Only the kernel's own sources (this module, ``kernel.py``, ``hashing.py``,
-``traversal.py``, ``prefetch.py``) name the compiled kernels' cache folder
+The engine package's files (this module among them) name the compiled kernels' cache folder
 (:mod:`sandmod.engine.kernelcache`): an edit anywhere else never compiles them anew.
 """
 
