@@ -127,6 +127,28 @@ start = "tap"
     assert poured[20] > poured[19]  # started again on frame 20
 
 
+def test_a_line_emitter_has_its_own_start_and_stop_beside_its_from_and_to(tmp_path):
+    """A line's ends are "from" and "to": its start and stop are frames, as every emitter's."""
+    world = world_from(
+        tmp_path,
+        """
+[[emitters]]
+shape = "line"
+element = "sand"
+from = [10, 0]
+to = [30, 0]
+chance = 1.0
+start = 3
+stop = 5
+""",
+    )
+    poured = []
+    for _ in range(8):
+        world.step()
+        poured.append(count(world, "sand"))
+    assert poured[2] == 0 and poured[3] > 0 and poured[4] > poured[3] and poured[5:] == [poured[4]] * 3
+
+
 def test_spawn_explode_and_heat_happen_on_their_frame(tmp_path):
     world = world_from(
         tmp_path,

@@ -135,8 +135,8 @@ class LineArea(_Strict):
     """A straight stroke, drawn with the line traversal."""
 
     shape: Literal["line"]
-    start: Point = Field(alias="from", description="First cell, [x, y].")
-    end: Point = Field(alias="to", description="Last cell, [x, y].")
+    first: Point = Field(alias="from", description="First cell, [x, y].")
+    last: Point = Field(alias="to", description="Last cell, [x, y].")
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
 
 

@@ -42,7 +42,7 @@ def shape_mask(shape: RectArea | CircleArea | LineArea | StrokeArea | FillArea, 
     if isinstance(shape, CircleArea):
         return circle_mask(width, height, shape.x, shape.y, shape.radius)
     if isinstance(shape, LineArea):
-        return stroke_mask(width, height, [tuple(shape.start), tuple(shape.end)], shape.thickness)
+        return stroke_mask(width, height, [tuple(shape.first), tuple(shape.last)], shape.thickness)
     if isinstance(shape, StrokeArea):
         return stroke_mask(width, height, [tuple(p) for p in shape.points], shape.thickness)
     x, y = shape.at
