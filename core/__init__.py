@@ -1,7 +1,7 @@
 """sandmod: a falling-sand engine in which every element is data.
 
 Its parts follow the data, each package importing only those before it
-(docs/ARCHITECTURE.md has the map):
+(docs/architecture.md has the map):
 
 - :mod:`sandmod.formats`: the files (TOML, the pydantic models of mods and worlds, pictures);
 - :mod:`sandmod.rules`: mods found, ordered and compiled into numpy tables;

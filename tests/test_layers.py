@@ -1,4 +1,4 @@
-"""The import rule of docs/ARCHITECTURE.md: each part of sandmod imports only the parts below it."""
+"""The import rule of docs/architecture.md: each part of sandmod imports only the parts below it."""
 
 from __future__ import annotations
 

@@ -96,6 +96,6 @@ def test_its_mod_tests_pass_and_its_recorder_writes(site, tmp_path):
 
 
 def test_every_hook_has_a_section_in_the_plugin_docs():
-    documented = set(re.findall(r"^## (\w+)$", (ROOT / "docs" / "PLUGINS.md").read_text(), re.MULTILINE))
+    documented = set(re.findall(r"^## (\w+)$", (ROOT / "docs" / "how-to" / "plugins.md").read_text(), re.MULTILINE))
     specs = {name for name, f in inspect.getmembers(hooks, inspect.isfunction) if hasattr(f, "sandmod_spec")}
     assert specs and specs <= documented, f"undocumented hooks: {sorted(specs - documented)}"

@@ -1,7 +1,7 @@
 """Count the machine instructions the kernel runs a frame: a measure that does not drift.
 
 A shared machine's speed drifts by up to 2x within minutes, so timings can
-only tell kernels apart by 6% or more (see docs/PERFORMANCE.md). The
+only tell kernels apart by 6% or more (see docs/performance.md). The
 instructions a stretch of frames takes are exact instead: the same kernel
 on the same frames counts the same to the instruction, so a change of 1%
 shows as 1%. They are not time (a spilled register or a mispredicted branch

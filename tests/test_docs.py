@@ -1,0 +1,58 @@
+"""The tutorial runs as written: in a fresh folder, its files are written and its commands run, in order."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).parent.parent
+TUTORIAL = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
+BLOCK = re.compile(r'```(\w+)(?: title="([^"]+)")?\n(.*?)```', re.S)
+
+
+def _run(command: str, folder: Path) -> subprocess.CompletedProcess:
+    """A command as a user types it, with this environment's sandmod and python first on the PATH."""
+    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"
+    return subprocess.run(command, shell=True, cwd=folder, env={**os.environ, "PATH": path}, capture_output=True, text=True)
+
+
+def test_the_tutorial_runs_as_written(tmp_path):
+    outputs = {}
+    for language, title, body in BLOCK.findall(TUTORIAL):
+        if title:  # a file the reader writes
+            (tmp_path / title).parent.mkdir(parents=True, exist_ok=True)
+            (tmp_path / title).write_text(body, encoding="utf-8")
+        elif language == "bash":
+            for line in body.splitlines():
+                command = line.split(" #")[0].strip()
+                if not command or command.startswith("pip install"):  # installed already: it is what the tests run in
+                    continue
+                done = _run(command, tmp_path)
+                assert done.returncode == 0, f"{command}\n{done.stdout}\n{done.stderr}"
+                outputs[command] = done.stdout + done.stderr
+    assert "snow:snow" in outputs["sandmod list"]
+    assert outputs["sandmod test snow"].splitlines()[:2] == ["snow:stays_frozen ... ok", "snow:melts_in_warm_water ... ok"]
+    shown = next(body for language, _, body in BLOCK.findall(TUTORIAL) if body.startswith("wrote snowfall.gif"))
+    assert outputs["sandmod render snowfall.toml"].split(" in ")[0] == shown.split(" in ")[0]
+    assert (tmp_path / "snowfall.gif").stat().st_size > 0
+
+
+def test_the_tutorials_example_of_a_mistake_is_what_validate_says(tmp_path):
+    mod = next(body for _, title, body in BLOCK.findall(TUTORIAL) if title == "mods/snow.toml")
+    (tmp_path / "mods").mkdir()
+    (tmp_path / "mods" / "snow.toml").write_text(mod.replace("density = 300 ", "density = -300"), encoding="utf-8")
+    done = _run("sandmod validate mods/", tmp_path)
+    shown = next(body for language, _, body in BLOCK.findall(TUTORIAL) if body.startswith("mods/snow.toml:"))
+    assert done.returncode == 2 and done.stdout + done.stderr == shown
+
+
+def test_every_image_in_the_docs_exists_and_says_how_it_was_made():
+    for page in [ROOT / "README.md", *(ROOT / "docs").rglob("*.md")]:
+        text = page.read_text(encoding="utf-8")
+        for image in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text):
+            assert (page.parent / image).is_file(), f"{page.name}: {image}"
+            made = [line for line in text.splitlines() if "sandmod " in line and Path(image).stem in line]
+            assert made, f"{page.name}: no command says how {image} was made"
