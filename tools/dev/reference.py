@@ -247,9 +247,12 @@ def cli_reference() -> str:
 
 def _documented(name: str, thing: Any, level: str = "###") -> list[str]:
     try:
-        signature = str(inspect.signature(thing)) if callable(thing) else ""
+        signature = inspect.signature(thing) if callable(thing) else None
     except (TypeError, ValueError):
-        signature = ""
+        signature = None
+    if signature is not None and next(iter(signature.parameters), None) == "self":
+        signature = signature.replace(parameters=list(signature.parameters.values())[1:])
+    signature = str(signature).replace("'", "") if signature is not None else ""
     kind = "class " if inspect.isclass(thing) else ""
     out = [f"{level} `{kind}{name}{signature}`", "", _markdown(inspect.getdoc(thing), whole=True).strip(), ""]
     if inspect.isclass(thing) and thing.__module__.startswith("sandmod"):
