@@ -59,9 +59,9 @@ def _type_text(annotation) -> str:
     if origin is Literal:
         return " or ".join(f'`"{a}"`' if isinstance(a, str) else f"`{a}`" for a in args)
     if origin is list:
-        return f"list of {_type_text(args[0])}"
+        return "list of " + _type_text(args[0]).replace("table", "tables")
     if origin is dict:
-        return f"table of {_type_text(args[1])}"
+        return "table of " + _type_text(args[1]).replace("table", "tables")
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return "table"
     return {int: "integer", float: "number", str: "string", bool: "true or false"}.get(annotation, str(annotation))
