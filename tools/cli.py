@@ -653,6 +653,68 @@ def test_(mods, mod_dirs) -> None:
         sys.exit(1)
 
 
+class WindowSize(click.ParamType):
+    """A world's width and height, as WIDTHxHEIGHT (each 4 to 4096)."""
+
+    name = "WxH"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, tuple):
+            return value
+        try:
+            width, height = (int(part) for part in str(value).lower().split("x"))
+        except ValueError:
+            self.fail(f"{value!r} is not WIDTHxHEIGHT, e.g. 320x200", param, ctx)
+        if not (4 <= width <= 4096 and 4 <= height <= 4096):
+            self.fail(f"{value!r}: each side from 4 to 4096 cells", param, ctx)
+        return width, height
+
+
+@cli.command()
+@click.argument("world", required=False, type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--size", type=WindowSize(), help="The size of a new, empty world, in cells.  [default: 320x200]")
+@click.option("--scale", type=click.IntRange(1, 16), default=2, show_default=True, help="Pixels per cell.")
+@click.option("--benchmark", "benchmark_frames", type=click.IntRange(1, 100000), metavar="FRAMES",
+              help="Show this many frames headless as fast as they go, a step each, while a brush paints (a new world: over a busy scene of fire, heat and blasts); print frames a second and each phase's time.")
+@_mods_option
+def play(world, size, scale, benchmark_frames, mod_dirs) -> None:
+    """Play a world in a window: paint with the mouse, watch it fall, save the session as a world file.
+
+    \b
+    left button    paint (shift: a straight line)   right button   erase
+    middle button  pick the element under it        wheel, [ ]     brush size
+    b              round or square brush            r              replace mode
+    h, c           heat and cold brushes            q, x           spray, explode at the cursor
+    1-9, /name     choose an element (or click the bar)
+    space, n       pause, one step                  + -            speed
+    v              heat view                        ctrl+z         undo a stroke
+    s              save the session (replays bit for bit with sandmod render)
+    f5, f9         save, load a snapshot            p, g           screenshot, GIF of the last seconds
+    delete         clear                            escape         quit
+
+    Saving a mod file while playing reloads the mods within a second; a
+    mistake in it is shown and the old rules go on.
+    """
+    import importlib.util
+
+    if importlib.util.find_spec("pygame") is None:
+        raise click.ClickException('sandmod play needs pygame-ce: pip install "sandmod[play]"')
+    from sandmod.jobs import play as window
+    from sandmod.jobs.session import Session
+    from sandmod.jobs.warmup import compile_new_kernels
+
+    if world is not None and size is not None:
+        raise click.UsageError("--size sizes a new world; a world file has its own size")
+    session = Session.open(world, size=size or ((512, 384) if benchmark_frames and world is None else None), mod_dirs=_mod_folders(mod_dirs))
+    compile_new_kernels(session.world.ruleset, announce=_say)
+    if benchmark_frames:
+        click.echo(json.dumps(window.benchmark(session, scale, benchmark_frames, busy=world is None)))
+        return
+    name = world.stem if world is not None else "play"
+    folder = world.parent if world is not None else Path(".")
+    window.Play(session, scale=scale, session_path=folder / f"{name}-session.toml").run()
+
+
 @cli.command()
 @click.option("--scene", "scenes", multiple=True,
               type=click.Choice(["mix", "halves", "everything", "settled", "patch"]), help="Scene to run (repeatable; default: mix).")

@@ -171,6 +171,7 @@ class _Paint(_Strict):
     temperature: Temperature | None = Field(
         None, description="Degrees Celsius of the painted cells (default: the element's own)."
     )
+    over: ElementRef | None = Field(None, description="Paint only the cells that hold this element (a replace brush).")
 
 
 class Rect(RectArea, _Paint):

@@ -102,10 +102,25 @@ def load_world(
     What the world would take is checked against ``max_memory`` bytes (None:
     no limit) before it is allocated; past it, a ProblemsError says how much.
     """
-    from .scene import build_world
-
     path = Path(path)
     spec, source = read_world_spec(path)
+    return load_world_spec(spec, source, path, mod_dirs=mod_dirs, seed=seed, registry=registry, max_memory=max_memory)
+
+
+def load_world_spec(
+    spec: WorldFile,
+    source: TomlSource,
+    path: Path,
+    *,
+    mod_dirs: Iterable[Path] = (),
+    seed: int | None = None,
+    registry: Registry | None = None,
+    max_memory: int | None = DEFAULT_MAX_MEMORY,
+) -> LoadedWorld:
+    """:func:`load_world` for a world file already read (or made in memory: ``path`` names it,
+    and its folder is where mods beside it are looked for)."""
+    from .scene import build_world
+
     registry = registry or load_registry()
     modset: ModSet = find_mods(registry, mod_folders(mod_dirs, path))
     ruleset = compile_mods(_select_for_world(modset, spec, source))

@@ -21,6 +21,7 @@ from ..formats.validation import validate
 from .world import Emitter, Heater, Painting, Spray, Switches, World
 from ..formats.worldspec import (
     Burst,
+    Event,
     Shape,
     CircleArea,
     FillArea,
@@ -104,8 +105,11 @@ class _Builder:
             return self.picture(loc, shape, kept)
         element = self.element(loc + ("element",), shape.element)
         area = self.area(loc, shape, kept=kept)
-        if element is None or area is None:
+        over = None if shape.over is None else self.element(loc + ("over",), shape.over)
+        if element is None or area is None or (shape.over is not None and over is None):
             return None
+        if over is not None:
+            return lambda cells: np.where(area(cells) & (cells == over), np.int32(element), np.int32(-1))
         return lambda cells: np.where(area(cells), np.int32(element), np.int32(-1))
 
     def erasure(self, loc: Loc, shape) -> Layer | None:
@@ -142,6 +146,39 @@ class _Builder:
         if kept and not self.keep(loc, patch.box.nbytes):
             return None
         return lambda cells: patch.whole()
+
+    def event(self, number: int, event: Event) -> None:
+        """Set up timeline event ``number``: what it paints, erases, heats, sprays or blows up on its frame."""
+        world, loc = self.world, ("timeline", number, event.action)
+        if event.paint is not None:
+            layer = self.layer(loc, event.paint, kept=True)
+            if layer is not None:
+                world.paintings.append(Painting(event.frame, layer, getattr(event.paint, "temperature", None), number))
+        elif event.erase is not None:
+            layer = self.erasure(loc, event.erase)
+            if layer is not None:
+                world.paintings.append(Painting(event.frame, layer, None, number))
+        elif event.heat is not None:
+            area = self.area(loc, event.heat, kept=True)
+            if area is not None:
+                world.heaters.append(Heater(area, event.heat.temperature, event.frame, event.frame + event.heat.frames))
+        elif event.spawn is not None:
+            made = self.burst(loc, event.spawn, event.frame, event.frame + 1, event.spawn.count, len(self.spec.sprays) + number)
+            if made is not None:
+                world.sprays.append(made)
+        elif event.explode is not None:
+            self.blast(loc, event.explode, event.frame)
+
+    def blast(self, loc: Loc, blast, frame: int) -> None:
+        """Schedule an explosion after the step of ``frame``."""
+        x, y = blast.at
+        if not (0 <= x < self.world.width and 0 <= y < self.world.height):
+            self.note(loc + ("at",), f"the centre lies outside the {self.world.width}x{self.world.height} world")
+            return
+        try:
+            self.world.scheduled.append((frame, self.world.blast_row(x, y, blast)))
+        except KeyError as exc:
+            self.note(loc + ("leaves",), exc.args[0])
 
     def switches(self, name: str | None) -> Switches:
         """The timeline's start and stop events for the emitter or spray called ``name``."""
@@ -209,41 +246,24 @@ def build_world(
         made = build.burst(("sprays", number), spray, spray.start, spray.stop, spray.rate, number, build.switches(spray.name))
         if made is not None:
             world.sprays.append(made)
-    blasts = [(("explosions", number), blast, blast.frame) for number, blast in enumerate(spec.explosions)]
+    for number, blast in enumerate(spec.explosions):
+        build.blast(("explosions", number), blast, blast.frame)
     for number, event in enumerate(spec.timeline):
-        loc = ("timeline", number, event.action)
-        if event.paint is not None:
-            layer = build.layer(loc, event.paint, kept=True)
-            if layer is not None:
-                world.paintings.append(Painting(event.frame, layer, getattr(event.paint, "temperature", None), number))
-        elif event.erase is not None:
-            layer = build.erasure(loc, event.erase)
-            if layer is not None:
-                world.paintings.append(Painting(event.frame, layer, None, number))
-        elif event.heat is not None:
-            area = build.area(loc, event.heat, kept=True)
-            if area is not None:
-                world.heaters.append(Heater(area, event.heat.temperature, event.frame, event.frame + event.heat.frames))
-        elif event.spawn is not None:
-            count = event.spawn.count
-            made = build.burst(loc, event.spawn, event.frame, event.frame + 1, count, len(spec.sprays) + number)
-            if made is not None:
-                world.sprays.append(made)
-        elif event.explode is not None:
-            blasts.append((loc, event.explode, event.frame))
-    for loc, blast, frame in blasts:
-        x, y = blast.at
-        if not (0 <= x < info.width and 0 <= y < info.height):
-            build.note(loc + ("at",), f"the centre lies outside the {info.width}x{info.height} world")
-            continue
-        try:
-            world.scheduled.append((frame, world.blast_row(x, y, blast)))
-        except KeyError as exc:
-            build.note(loc + ("leaves",), exc.args[0])
+        build.event(number, event)
     world.scheduled.sort(key=lambda scheduled: scheduled[0])  # stable: same frame, in the file's order
     if build.problems:
         raise ProblemsError(sorted(build.problems, key=lambda p: (p.line or 0, p.column or 0)))
     return world
+
+
+def add_event(world: World, spec: WorldFile, source: TomlSource, number: int) -> None:
+    """Set up ``spec.timeline[number]`` in a world built from the timeline's earlier events, as
+    :func:`build_world` would have (``sandmod play`` adds events as they happen, and a render of
+    the world file it writes makes the same frames). ProblemsError names a mistake."""
+    build = _Builder(spec, world.ruleset, source, world, MemoryBudget(None))
+    build.event(number, spec.timeline[number])
+    if build.problems:
+        raise ProblemsError(build.problems)
 
 
 def _check_names(spec: WorldFile, build: _Builder) -> None:

@@ -1,0 +1,136 @@
+"""A play session: what the player does is recorded as a world file that replays it bit for bit;
+undo goes back a stroke; mods saved while playing are reloaded, or their problems shown."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from sandmod.errors import ProblemsError
+from sandmod.jobs.benchmark import state_digest
+from sandmod.jobs.session import Session
+from sandmod.world.loading import load_world
+
+WORLD = """
+[world]
+width = 64
+height = 48
+seed = 3
+mods = ["sand", "water", "explosives"]
+
+[[scene]]
+shape = "rect"
+element = "stone"
+x = 0
+y = 44
+width = 64
+height = 4
+
+[[emitters]]
+shape = "rect"
+element = "water"
+x = 50
+y = 0
+width = 4
+height = 2
+chance = 0.3
+"""
+
+
+@pytest.fixture(autouse=True)
+def _in_tmp(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+
+
+def played(session: Session) -> None:
+    """Strokes, an erase, heat, a spray and a blast, some while paused (two events on one frame)."""
+    session.begin_stroke()
+    session.add("paint", {"shape": "stroke", "points": [[10, 10], [30, 12]], "thickness": 3, "element": "sand"})
+    for _ in range(5):
+        session.step()
+    session.add("paint", {"shape": "stroke", "points": [[30, 12], [40, 20]], "thickness": 3, "element": "sand"})
+    session.add("paint", {"shape": "rect", "x": 5, "y": 30, "width": 20, "height": 6, "element": "water", "over": "empty"})
+    for _ in range(10):
+        session.step()
+    session.begin_stroke()
+    session.add("erase", {"shape": "stroke", "points": [[20, 40], [25, 43]], "thickness": 4})
+    session.add("heat", {"shape": "rect", "x": 0, "y": 40, "width": 10, "height": 4, "temperature": 800.0})
+    session.add("spawn", {"element": "sand", "at": [32, 5], "radius": 2, "count": 10, "direction": 90, "spread": 90, "speed": [1, 2]})
+    session.add("explode", {"at": [40, 40], "radius": 5, "strength": 10.0})
+    for _ in range(20):
+        session.step()
+
+
+def test_the_saved_world_file_replays_the_session_bit_for_bit(tmp_path):
+    Path("w.toml").write_text(WORLD)
+    session = Session.open(Path("w.toml"))
+    played(session)
+    session.save(Path("w-session.toml"))
+    replay = load_world("w-session.toml")
+    for _ in range(replay.spec.render.frames):
+        replay.world.step()
+    assert replay.world.frame == session.world.frame == 35
+    assert state_digest(replay.world) == state_digest(session.world)
+
+
+def test_a_session_without_a_world_file_replays_too(tmp_path):
+    session = Session.open(None, size=(48, 40))
+    session.begin_stroke()
+    session.add("paint", {"shape": "stroke", "points": [[5, 5], [40, 5]], "thickness": 5, "element": "sand"})
+    for _ in range(30):
+        session.step()
+    session.save(Path("play-session.toml"))
+    replay = load_world("play-session.toml")
+    for _ in range(replay.spec.render.frames):
+        replay.world.step()
+    assert state_digest(replay.world) == state_digest(session.world)
+    assert replay.world.counts()["sand:sand"] > 100
+
+
+def test_undo_goes_back_to_before_the_last_stroke_and_forgets_it(tmp_path):
+    Path("w.toml").write_text(WORLD)
+    session = Session.open(Path("w.toml"))
+    for _ in range(5):
+        session.step()
+    before = state_digest(session.world)
+    session.begin_stroke()
+    session.add("paint", {"shape": "circle", "x": 20, "y": 20, "radius": 6, "element": "sand"})
+    for _ in range(8):
+        session.step()
+    assert session.undo() and session.world.frame == 5 and state_digest(session.world) == before
+    assert session.events == [] and not session.undo()
+    for _ in range(8):  # and the world goes on as if the stroke never was
+        session.step()
+    fresh = load_world("w.toml").world
+    for _ in range(13):
+        fresh.step()
+    assert state_digest(fresh) == state_digest(session.world)
+
+
+def test_a_mistake_in_an_event_is_a_problem_and_records_nothing(tmp_path):
+    session = Session.open(None, size=(32, 32))
+    with pytest.raises(ProblemsError) as caught:
+        session.add("paint", {"shape": "circle", "x": 5, "y": 5, "radius": 2, "element": "nosuch"})
+    assert "nosuch" in str(caught.value.problems[0]) and session.events == []
+
+
+def test_a_mod_saved_while_playing_is_reloaded_keeping_every_cell(tmp_path):
+    Path("mods").mkdir()
+    mod = Path("mods/goo.toml")
+    mod.write_text('[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n')
+    session = Session.open(None, size=(40, 30))
+    session.add("paint", {"shape": "rect", "x": 5, "y": 20, "width": 30, "height": 5, "element": "goo"})
+    session.step()
+    goo = session.world.counts()["goo:goo"]
+    assert not session.mods_changed()
+    mod.write_text(mod.read_text().replace("#00ff00", "#ff00ff"))
+    assert session.mods_changed()
+    assert session.reload_mods() == []
+    ruleset = session.world.ruleset
+    assert ruleset.elements[ruleset.index("goo")].spec.color == ["#ff00ff"]
+    assert session.world.counts()["goo:goo"] == goo and session.world.frame == 1
+    mod.write_text(mod.read_text().replace("density = 900", "density = -1"))
+    problems = session.reload_mods()
+    assert problems and "goo.toml" in problems[0] and "density" in problems[0]
+    assert session.world.ruleset is ruleset  # the old rules go on
