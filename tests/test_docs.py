@@ -56,3 +56,25 @@ def test_every_image_in_the_docs_exists_and_says_how_it_was_made():
             assert (page.parent / image).is_file(), f"{page.name}: {image}"
             made = [line for line in text.splitlines() if "sandmod " in line and Path(image).stem in line]
             assert made, f"{page.name}: no command says how {image} was made"
+
+
+def test_every_world_and_mod_in_the_how_tos_that_is_whole_validates():
+    """A how-to's TOML block with a [world] or [mod] table is a whole file: it must be a valid one."""
+    from pydantic import ValidationError
+
+    from sandmod.formats.modspec import ModFile
+    from sandmod.formats.tomlsource import TomlSource
+    from sandmod.formats.worldspec import WorldFile
+
+    checked = 0
+    for page in (ROOT / "docs" / "how-to").glob("*.md"):
+        for language, _, body in BLOCK.findall(page.read_text(encoding="utf-8")):
+            if language != "toml" or not ("[world]" in body or "[mod]" in body):
+                continue
+            data = TomlSource.parse(body, page.name).data
+            try:
+                (WorldFile if "world" in data else ModFile).model_validate(data)
+            except ValidationError as error:
+                raise AssertionError(f"{page.name}: {error}") from None
+            checked += 1
+    assert checked >= 3

@@ -117,3 +117,19 @@ def test_a_bad_world_is_one_line_per_problem_and_exit_2_before_any_window():
     result = CliRunner().invoke(cli, ["play", "bad.toml"])
     assert result.exit_code == 2 and "bad.toml:2:1: world.width: must be >= 4" in result.output
     assert not pygame.display.get_init()
+
+
+def test_a_world_larger_than_the_window_is_seen_through_a_view_that_pans_and_zooms():
+    play = Play(Session.open(None, size=(800, 500)), scale=2, fixed_steps=1)
+    assert play.area == (1280, 800) and play._shown() == (640, 400)
+    key(play, pygame.K_RIGHT)
+    key(play, pygame.K_DOWN)
+    assert play.view == [160, 100] and play._cell(at(0, 0)) == (160, 100)
+    key(play, pygame.K_RIGHT)
+    assert play.view == [160, 100]  # at the world's edge
+    play._zoom(2, (0, 0))
+    assert play.scale == 4 and play._shown() == (320, 200) and play._cell((0, 0)) == (160, 100)
+    post(pygame.MOUSEBUTTONDOWN, pos=(8, 8), button=1)  # paints where the view shows, not at the corner
+    post(pygame.MOUSEBUTTONUP, pos=(8, 8), button=1)
+    frames(play, 1)
+    assert play.session.world.cells[100:106, 160:166].any() and not play.session.world.cells[:10, :10].any()

@@ -58,6 +58,7 @@ def played(session: Session) -> None:
     session.add("heat", {"shape": "rect", "x": 0, "y": 40, "width": 10, "height": 4, "temperature": 800.0})
     session.add("spawn", {"element": "sand", "at": [32, 5], "radius": 2, "count": 10, "direction": 90, "spread": 90, "speed": [1, 2]})
     session.add("explode", {"at": [40, 40], "radius": 5, "strength": 10.0})
+    session.add("launch", {"shape": "circle", "x": 20, "y": 42, "radius": 4, "speed": [2, 4], "spread": 90})
     for _ in range(20):
         session.step()
 

@@ -149,6 +149,31 @@ stop = 5
     assert poured[2] == 0 and poured[3] > 0 and poured[4] > poured[3] and poured[5:] == [poured[4]] * 3
 
 
+def test_launch_sends_a_shapes_cells_flying_as_particles_that_land_as_themselves(tmp_path):
+    world = world_from(
+        tmp_path,
+        """
+[[scene]]
+shape = "rect"
+element = "sand"
+x = 15
+y = 24
+width = 10
+height = 4
+
+[[timeline]]
+frame = 3
+launch = { shape = "rect", x = 15, y = 24, width = 10, height = 4, direction = 90, spread = 60, speed = [2, 3] }
+""",
+    )
+    steps(world, 3)
+    assert count(world, "particle") == 0 and count(world, "sand") == 40
+    steps(world, 1)
+    assert count(world, "particle") > 30  # in flight, carrying sand
+    steps(world, 60)
+    assert count(world, "particle") == 0 and count(world, "sand") == 40  # landed, every grain
+
+
 def test_spawn_explode_and_heat_happen_on_their_frame(tmp_path):
     world = world_from(
         tmp_path,
@@ -239,7 +264,7 @@ erase = { shape = "circle", element = "sand", x = 5, y = 5, radius = 2 }
 """,
     )
     assert lines == [
-        "w.toml:15:1: timeline.0: give exactly one of paint, erase, heat, start, stop, spawn, explode (got start, stop)",
+        "w.toml:15:1: timeline.0: give exactly one of paint, erase, heat, start, stop, spawn, launch, explode (got start, stop)",
         "w.toml:21:1: timeline.1.frame: must be >= 0 (got -1)",
         "w.toml:22:1: timeline.1.erase: 'erase' empties its cells; leave 'element' out (or 'paint' with it)",
     ]

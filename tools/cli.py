@@ -688,6 +688,7 @@ def play(world, size, scale, benchmark_frames, mod_dirs) -> None:
     1-9, /name     choose an element (or click the bar)
     space, n       pause, one step                  + -            speed
     v              heat view                        ctrl+z         undo a stroke
+    ctrl+wheel     zoom                             arrows         pan (a world larger than the window)
     s              save the session (replays bit for bit with sandmod render)
     f5, f9         save, load a snapshot            p, g           screenshot, GIF of the last seconds
     delete         clear                            escape         quit

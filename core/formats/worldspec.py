@@ -43,7 +43,7 @@
     stop = 300
 
     [[timeline]]                   # at a frame, exactly one of: paint, erase, heat,
-    frame = 150                    # start, stop (a named emitter or spray), spawn, explode
+    frame = 150                    # start, stop (a named emitter or spray), spawn, launch, explode
     heat = { shape = "rect", x = 60, y = 108, width = 30, height = 2, temperature = 600, frames = 100 }
 
     [render]
@@ -263,10 +263,7 @@ def _as_range(value: object) -> object:
     return [value, value] if isinstance(value, (int, float)) else value
 
 
-class _Shooting(_Strict):
-    element: ElementRef = Field(description="What flies: a particle element, or any element to carry.")
-    at: Point = Field(description="Where particles start, [x, y].")
-    radius: float = Field(0, ge=0, le=64, description="They start from empty cells within this distance of 'at'.")
+class _Flight(_Strict):
     direction: float = Field(90, ge=-360, le=360, description="Degrees: 0 right, 90 up, 180 left, -90 down.")
     spread: float = Field(0, ge=0, le=360, description="Width of the cone of directions, in degrees.")
     speed: Annotated[list[Speed], BeforeValidator(_as_range), Field(min_length=2, max_length=2)] = Field(
@@ -280,6 +277,31 @@ class _Shooting(_Strict):
         if speed[0] > speed[1]:
             raise ValueError("give [slowest, fastest]")
         return speed
+
+
+class _Shooting(_Flight):
+    element: ElementRef = Field(description="What flies: a particle element, or any element to carry.")
+    at: Point = Field(description="Where particles start, [x, y].")
+    radius: float = Field(0, ge=0, le=64, description="They start from empty cells within this distance of 'at'.")
+
+
+class RectLaunch(RectArea, _Flight):
+    """Sends the cells of a rectangle flying."""
+
+
+class CircleLaunch(CircleArea, _Flight):
+    """Sends the cells of a disc flying."""
+
+
+class LineLaunch(LineArea, _Flight):
+    """Sends the cells along a stroke flying."""
+
+
+class StrokeLaunch(StrokeArea, _Flight):
+    """Sends the cells along a polyline flying."""
+
+
+Launch = Annotated[Union[RectLaunch, CircleLaunch, LineLaunch, StrokeLaunch], Field(discriminator="shape")]
 
 
 class Spray(_Shooting, _Timed):
@@ -347,13 +369,13 @@ class FillHeat(FillArea, _Heating):
 Heat = Annotated[Union[RectHeat, CircleHeat, LineHeat, StrokeHeat, FillHeat], Field(discriminator="shape")]
 
 #: What a timeline event may do; each event does exactly one.
-ACTIONS = ("paint", "erase", "heat", "start", "stop", "spawn", "explode")
+ACTIONS = ("paint", "erase", "heat", "start", "stop", "spawn", "launch", "explode")
 
 
 class Event(_Strict):
     """Something that happens at a frame: give ``frame`` and exactly one action.
 
-    Paint, erase, heat, start, stop and spawn happen before the frame's step;
+    Paint, erase, heat, start, stop, spawn and launch happen before the frame's step;
     an explosion goes off after it (as ``[[explosions]]`` do).
     """
 
@@ -364,6 +386,9 @@ class Event(_Strict):
     start: str | None = Field(None, description="Start the named emitter or spray.")
     stop: str | None = Field(None, description="Stop the named emitter or spray.")
     spawn: Burst | None = Field(None, description="Shoot particles at once.")
+    launch: Launch | None = Field(
+        None, description="Send the cells of a shape flying: each becomes a particle carrying its element, and lands as it."
+    )
     explode: Blast | None = Field(None, description="Set off an explosion.")
 
     @model_validator(mode="after")
@@ -407,6 +432,6 @@ class WorldFile(_Strict):
     sprays: list[Spray] = Field(default_factory=list, max_length=MAX_ITEMS, description="Sources of flying particles.")
     explosions: list[ScheduledExplosion] = Field(default_factory=list, max_length=MAX_ITEMS, description="Blasts at given frames and places.")
     timeline: list[Event] = Field(
-        default_factory=list, max_length=MAX_ITEMS, description="Events at given frames: paint, erase, heat, start, stop, spawn, explode."
+        default_factory=list, max_length=MAX_ITEMS, description="Events at given frames: paint, erase, heat, start, stop, spawn, launch, explode."
     )
     render: RenderSettings = Field(default_factory=RenderSettings, description="How 'sandmod render' records.")

@@ -28,6 +28,7 @@ STATUS = 20  # the status line's
 SWATCH = 24  # an element's swatch in the bar
 CAPTURE_SECONDS = 10
 MIN_WIDTH = 640  # room for the element bar and the status line
+MAX_AREA = (1280, 800)  # the most of the screen the world takes; a larger one is seen through a view
 SPEEDS = (0.25, 0.5, 1, 2, 4, 8)
 
 @dataclass
@@ -73,7 +74,9 @@ class Play:
         pygame.display.init()  # and no sound
         pygame.font.init()
         world = self.session.world
-        self.size = (max(world.width * self.scale, MIN_WIDTH), world.height * self.scale + BAR + STATUS)
+        self.area = (min(world.width * self.scale, MAX_AREA[0]), min(world.height * self.scale, MAX_AREA[1]))
+        self.size = (max(self.area[0], MIN_WIDTH), self.area[1] + BAR + STATUS)
+        self.view = [0, 0]  # the world's cell at the area's top-left corner
         self.screen = pygame.display.set_mode(self.size)
         pygame.display.set_caption("sandmod")
         self.font = pygame.font.Font(None, 17)
@@ -105,10 +108,6 @@ class Play:
         palette = np.frombuffer(world.ruleset.palette, np.uint8).reshape(256, 3)
         self.cells_surface.set_palette([tuple(int(c) for c in rgb) for rgb in palette])
         self.heat_surface = pygame.Surface((world.width, world.height), depth=24)
-        shown = (world.width * self.scale, world.height * self.scale)
-        self.cells_scaled = pygame.Surface(shown, depth=8)
-        self.cells_scaled.set_palette(self.cells_surface.get_palette())
-        self.heat_scaled = pygame.Surface(shown, depth=24)
         self.elements = [e for e in range(1, len(world.ruleset.elements)) if e != world.ruleset.particle]
         self.fresh = True
 
@@ -168,9 +167,29 @@ class Play:
     # --- input ----------------------------------------------------------------------------------
 
     def _cell(self, pos) -> tuple[int, int] | None:
-        x, y = pos[0] // self.scale, pos[1] // self.scale
+        """The cell under a window position (None: not over the world)."""
+        if not (0 <= pos[0] < self.area[0] and 0 <= pos[1] < self.area[1]):
+            return None
+        x, y = self.view[0] + pos[0] // self.scale, self.view[1] + pos[1] // self.scale
         world = self.session.world
         return (x, y) if 0 <= x < world.width and 0 <= y < world.height else None
+
+    def _shown(self) -> tuple[int, int]:
+        """How many columns and rows of cells the area shows."""
+        world = self.session.world
+        return min(world.width, -(-self.area[0] // self.scale)), min(world.height, -(-self.area[1] // self.scale))
+
+    def _pan(self, dx: int, dy: int) -> None:
+        world, (columns, rows) = self.session.world, self._shown()
+        self.view = [int(np.clip(self.view[0] + dx, 0, world.width - columns)), int(np.clip(self.view[1] + dy, 0, world.height - rows))]
+        self.fresh = True
+
+    def _zoom(self, by: int, pos) -> None:
+        """Cells bigger or smaller on the screen, the cell under ``pos`` staying under it."""
+        cell = self._cell(pos) or (self.view[0], self.view[1])
+        self.scale = int(np.clip(self.scale + by, 1, 16))
+        self.view = [cell[0] - pos[0] // self.scale, cell[1] - pos[1] // self.scale]
+        self._pan(0, 0)
 
     def _input(self) -> None:
         pygame = self.pg
@@ -183,13 +202,15 @@ class Play:
                 self._button_down(event)
             elif event.type == pygame.MOUSEBUTTONUP and event.button in (1, 3):
                 self.stroke, self.last_cell = None, self._cell(event.pos) or self.last_cell
+            elif event.type == pygame.MOUSEWHEEL and pygame.key.get_mods() & pygame.KMOD_CTRL:
+                self._zoom(event.y, pygame.mouse.get_pos())
             elif event.type == pygame.MOUSEWHEEL:
                 self.brush.size = int(np.clip(self.brush.size + event.y, 1, 64))
             elif event.type == pygame.MOUSEMOTION and self.stroke is not None:
                 self._drag(event.pos)
 
     def _button_down(self, event) -> None:
-        if event.pos[1] >= self.session.world.height * self.scale:
+        if event.pos[1] >= self.area[1]:
             self._bar_click(event.pos)
             return
         cell = self._cell(event.pos)
@@ -291,6 +312,9 @@ class Play:
             self.screenshot(Path("play-screenshot.png"))
         elif key == pygame.K_g:
             self.capture(Path("play-capture.gif"))
+        elif key in (pygame.K_LEFT, pygame.K_RIGHT, pygame.K_UP, pygame.K_DOWN):
+            columns, rows = self._shown()
+            self._pan({pygame.K_LEFT: -columns // 4, pygame.K_RIGHT: columns // 4}.get(key, 0), {pygame.K_UP: -rows // 4, pygame.K_DOWN: rows // 4}.get(key, 0))
         elif key == pygame.K_SLASH:
             self.search = ""
         elif pygame.K_1 <= key <= pygame.K_9 and key - pygame.K_1 < len(self.elements):
@@ -316,7 +340,7 @@ class Play:
 
     def _bar_click(self, pos) -> None:
         index = pos[0] // SWATCH
-        if pos[1] < self.session.world.height * self.scale + BAR and index < len(self.elements):
+        if pos[1] < self.area[1] + BAR and index < len(self.elements):
             self.brush.element = self.elements[index]
 
     # --- files ----------------------------------------------------------------------------------
@@ -349,12 +373,13 @@ class Play:
         from ..world.loading import load_registry
 
         world = self.session.world
+        scale = max(1, min(self.scale, MAX_AREA[0] // world.width, MAX_AREA[1] // world.height))  # the whole world
         spec = load_registry().recorders["gif"].value
-        settings = VideoSettings(world.width * self.scale, world.height * self.scale, world.ruleset.palette, DISPLAY_FPS / 2)
+        settings = VideoSettings(world.width * scale, world.height * scale, world.ruleset.palette, DISPLAY_FPS / 2)
         with atomic_path(path) as temporary:
             recorder = spec.open(temporary, settings)
             for frame in self.captured:
-                recorder.add_frame(enlarge(frame, self.scale))
+                recorder.add_frame(enlarge(frame, scale))
             recorder.close()
         self.message = f"saved {path}: {len(self.captured)} images"
 
@@ -375,9 +400,10 @@ class Play:
         self.phases.pixels += time.perf_counter() - began
         began = time.perf_counter()
         if self.fresh:
-            source, scaled = (self.heat_surface, self.heat_scaled) if self.heat_view else (self.cells_surface, self.cells_scaled)
-            pygame.transform.scale(source, scaled.get_size(), scaled)
-            self.screen.blit(scaled, (0, 0))
+            columns, rows = self._shown()
+            source = (self.heat_surface if self.heat_view else self.cells_surface).subsurface((*self.view, columns, rows))
+            self.screen.fill((0, 0, 0), (0, 0, *self.area))
+            self.screen.blit(pygame.transform.scale(source, (columns * self.scale, rows * self.scale)), (0, 0))
         self._draw_bar()
         self._draw_status()
         pygame.display.flip()
@@ -395,7 +421,7 @@ class Play:
 
     def _draw_bar(self) -> None:
         pygame, world = self.pg, self.session.world
-        top = world.height * self.scale
+        top = self.area[1]
         pygame.draw.rect(self.screen, (24, 24, 28), (0, top, self.size[0], BAR + STATUS))
         palette = np.frombuffer(world.ruleset.palette, np.uint8).reshape(256, 3)
         matches = set(self._matches()) if self.search else set()
@@ -409,11 +435,10 @@ class Play:
                 pygame.draw.rect(self.screen, (255, 255, 255), (left + 1, top + 1, SWATCH - 2, BAR - 2), 2)
 
     def _draw_status(self) -> None:
-        world = self.session.world
         text = self.problems[0] if self.problems else self._status()
         colour = (255, 120, 100) if self.problems else (220, 220, 220)
         image = self.font.render(text[: self.size[0] // 5], True, colour)
-        self.screen.blit(image, (4, world.height * self.scale + BAR + 3))
+        self.screen.blit(image, (4, self.area[1] + BAR + 3))
 
     def _status(self) -> str:
         world, brush = self.session.world, self.brush

@@ -18,7 +18,7 @@ from .shapes import Patch, circle_mask, fill_mask, rect_mask, stroke_mask
 from ..formats.tomlsource import Loc, TomlSource
 from ..formats.userfiles import Refused, inside
 from ..formats.validation import validate
-from .world import Emitter, Heater, Painting, Spray, Switches, World
+from .world import Emitter, Heater, Launcher, Painting, Spray, Switches, World
 from ..formats.worldspec import (
     Burst,
     Event,
@@ -166,6 +166,11 @@ class _Builder:
             made = self.burst(loc, event.spawn, event.frame, event.frame + 1, event.spawn.count, len(self.spec.sprays) + number)
             if made is not None:
                 world.sprays.append(made)
+        elif event.launch is not None:
+            area = self.area(loc, event.launch, kept=True)
+            if area is not None:
+                launch = event.launch
+                world.launchers.append(Launcher(event.frame, area, launch.direction, launch.spread, tuple(launch.speed), number))
         elif event.explode is not None:
             self.blast(loc, event.explode, event.frame)
 

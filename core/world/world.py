@@ -42,6 +42,7 @@ from ..engine.hashing import (
     SALT_SPAWN,
     SALT_SPRAY,
     SALT_BLAST,
+    SALT_LAUNCH,
     SALT_TIMELINE,
     cell_hash,
     chance_threshold,
@@ -148,6 +149,28 @@ class Painting:
 
 
 @dataclass(frozen=True)
+class Launcher:
+    """Sends the cells ``area`` gives flying on ``frame``, before the step: each non-empty cell becomes a
+    particle carrying its element, at an angle within ``spread`` degrees around ``direction`` (0 = right,
+    90 = up) and a speed between ``speeds``, rolled per cell."""
+
+    frame: int
+    area: Callable[[np.ndarray], np.ndarray]  # the world's cells -> a boolean mask
+    direction: float
+    spread: float
+    speeds: tuple[float, float]
+    number: int  # which event of the timeline, for independent randomness
+
+    def velocities(self, seed: int, ys: np.ndarray, xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's velocity, in cells per frame."""
+        key = frame_key(seed, self.frame, SALT_LAUNCH + self.number)
+        xs, ys = xs.astype(np.uint64), ys.astype(np.uint64)
+        angle = np.radians(self.direction + (cell_hash(key, xs, ys) / 2**32 - 0.5) * self.spread)
+        speed = self.speeds[0] + cell_hash(mix32(key), xs, ys) / 2**32 * (self.speeds[1] - self.speeds[0])
+        return speed * np.cos(angle), -speed * np.sin(angle)
+
+
+@dataclass(frozen=True)
 class Heater:
     """Sets the cells ``area`` gives to ``celsius`` degrees before each step from ``start`` until before ``stop``."""
 
@@ -227,6 +250,7 @@ class World:
         self.scheduled: list[tuple[int, np.ndarray]] = []  # (frame, blast row) from the world file
         self.paintings: list[Painting] = []
         self.heaters: list[Heater] = []
+        self.launchers: list[Launcher] = []
         self.paint(np.broadcast_to(True, shape), 0)  # empty, with its own shades
 
     @property
@@ -413,6 +437,10 @@ class World:
                 painted = self.paint_layer(painting.layer(self.cells), salt=SALT_TIMELINE + painting.number)
                 if painting.celsius is not None:
                     self.set_temperature(painted, painting.celsius)
+        for launcher in self.launchers:
+            if launcher.frame == self.frame:
+                ys, xs = np.nonzero(launcher.area(self.cells))
+                self.launch(ys, xs, *launcher.velocities(self.seed, ys, xs))
         for heater in self.heaters:
             if heater.active(self.frame):
                 self.set_temperature(heater.area(self.cells), heater.celsius)
