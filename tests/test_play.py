@@ -133,3 +133,12 @@ def test_a_world_larger_than_the_window_is_seen_through_a_view_that_pans_and_zoo
     post(pygame.MOUSEBUTTONUP, pos=(8, 8), button=1)
     frames(play, 1)
     assert play.session.world.cells[100:106, 160:166].any() and not play.session.world.cells[:10, :10].any()
+
+
+def test_save_session_writes_the_world_file_when_the_window_closes():
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1, save_on_exit=True)
+    post(pygame.MOUSEBUTTONDOWN, pos=at(10, 5), button=1)
+    post(pygame.MOUSEBUTTONUP, pos=at(10, 5), button=1)
+    post(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="")
+    play.run(frames=50)
+    assert "paint" in Path("play-session.toml").read_text()

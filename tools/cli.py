@@ -676,8 +676,9 @@ class WindowSize(click.ParamType):
 @click.option("--scale", type=click.IntRange(1, 16), default=2, show_default=True, help="Pixels per cell.")
 @click.option("--benchmark", "benchmark_frames", type=click.IntRange(1, 100000), metavar="FRAMES",
               help="Show this many frames headless as fast as they go, a step each, while a brush paints (a new world: over a busy scene of fire, heat and blasts); print frames a second and each phase's time.")
+@click.option("--save-session", is_flag=True, help="Also write the session's world file when the window closes (s writes it at any time).")
 @_mods_option
-def play(world, size, scale, benchmark_frames, mod_dirs) -> None:
+def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
     """Play a world in a window: paint with the mouse, watch it fall, save the session as a world file.
 
     \b
@@ -713,7 +714,10 @@ def play(world, size, scale, benchmark_frames, mod_dirs) -> None:
         return
     name = world.stem if world is not None else "play"
     folder = world.parent if world is not None else Path(".")
-    window.Play(session, scale=scale, session_path=folder / f"{name}-session.toml").run()
+    session_path = folder / f"{name}-session.toml"
+    window.Play(session, scale=scale, session_path=session_path, save_on_exit=save_session).run()
+    if save_session:
+        click.echo(f"wrote {display_path(session_path)}: sandmod render {display_path(session_path)} replays the session")
 
 
 @cli.command()

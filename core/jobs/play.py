@@ -60,6 +60,7 @@ class Play:
     scale: int = 2
     session_path: Path = Path("play-session.toml")
     fixed_steps: int | None = None  # steps per displayed frame regardless of time (tests and --benchmark)
+    save_on_exit: bool = False  # write the session's world file when the window closes
     paused: bool = False
     speed: float = 1.0
     heat_view: bool = False
@@ -121,6 +122,8 @@ class Play:
         while self.running and (frames is None or shown < frames):
             self._one_frame(clock.tick(DISPLAY_FPS if self.fixed_steps is None else 0) / 1000)
             shown += 1
+        if self.save_on_exit:
+            self.save_session()
         self.pg.quit()
 
     def _one_frame(self, elapsed: float = 0.0) -> None:
