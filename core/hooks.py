@@ -70,3 +70,22 @@ def register_recorders(register: Callable[["RecorderSpec"], None]) -> None:
     a name, the file extensions it writes, and a function that opens a
     recorder on a path.
     """
+
+
+#: Measures a world: a number, or a mapping of names to numbers (each becomes a column ``name.key``).
+Metric = Callable[[Any], "float | Mapping[str, float]"]
+
+
+@hookspec
+def register_metrics(register: Callable[[str, Metric], None]) -> None:
+    """Add metrics that ``sandmod batch`` takes of each run, at the sweep's ``[metrics] frames``.
+
+    ``register(name, measure)``: ``measure(world)`` gets the
+    :class:`~sandmod.world.world.World` and returns a number, or a mapping of
+    names to numbers; the results table gets a column ``name@FRAME`` (or
+    ``name.key@FRAME``) for it. Example, the height of the tallest heap::
+
+        @hookimpl
+        def register_metrics(register):
+            register("top", lambda world: float((world.cells != 0).any(axis=1).argmax()))
+    """

@@ -50,6 +50,7 @@ class Registry:
     mod_loaders: dict[str, Registered[hooks.ModLoader]] = field(default_factory=dict)
     mods: list[Registered[TomlSource]] = field(default_factory=list)
     recorders: dict[str, Registered[RecorderSpec]] = field(default_factory=dict)
+    metrics: dict[str, Registered[hooks.Metric]] = field(default_factory=dict)
 
     def recorder_for(self, path: Path) -> RecorderSpec | None:
         """The recorder that writes files with ``path``'s extension (a folder recorder: no extension)."""
@@ -144,10 +145,20 @@ def collect(pm: pluggy.PluginManager) -> Registry:
 
         return register
 
+    def metric(plugin: str) -> Callable[[str, hooks.Metric], None]:
+        def register(name: str, measure: hooks.Metric) -> None:
+            if not (isinstance(name, str) and name and callable(measure)):
+                problems.append(Problem(plugin, None, "register_metrics", f"register(name, measure) needs a name and a function, got {name!r}, {measure!r}"))
+                return
+            registry.metrics[name] = Registered(measure, plugin)
+
+        return register
+
     each("register_mod_dirs", mod_dir)
     each("register_mod_loaders", mod_loader)
     each("register_mods", mod)
     each("register_recorders", recorder)
+    each("register_metrics", metric)
     if problems:
         raise ProblemsError(problems)
     return registry

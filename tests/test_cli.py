@@ -213,7 +213,8 @@ def test_validate_accepts_good_files_and_reports_every_bad_one():
 def test_validate_checks_the_world_files_of_a_folder_as_worlds():
     result = invoke("validate", str(EXAMPLES))
     assert result.exit_code == 0, result.output
-    assert result.stdout.rstrip().endswith(f"{len(list(EXAMPLES.glob('*.toml')))} worlds")
+    sweeps = [p for p in EXAMPLES.glob("*.toml") if "\n[sweep]" in p.read_text()]
+    assert sweeps and result.stdout.rstrip().endswith(f"{len(list(EXAMPLES.glob('*.toml'))) - len(sweeps)} worlds, {len(sweeps)} sweep")
     levels = Path("levels")  # worlds, with their mods beside them
     write_mods(levels / "mods", {"glow.toml": '[mod]\nname = "glow"\n[elements.glow]\narchetype = "gas"\ncolor = "#000000"\n'})
     (levels / "good.toml").write_text(POURING.format(element="glow"))

@@ -54,7 +54,7 @@ def test_every_image_in_the_docs_exists_and_says_how_it_was_made():
         text = page.read_text(encoding="utf-8")
         for image in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text):
             assert (page.parent / image).is_file(), f"{page.name}: {image}"
-            made = [line for line in text.splitlines() if "sandmod " in line and Path(image).stem in line]
+            made = [line for line in text.splitlines() if ("sandmod " in line or "python tools/" in line) and Path(image).stem in line]
             assert made, f"{page.name}: no command says how {image} was made"
 
 
@@ -78,3 +78,12 @@ def test_every_world_and_mod_in_the_how_tos_that_is_whole_validates():
                 raise AssertionError(f"{page.name}: {error}") from None
             checked += 1
     assert checked >= 3
+
+
+def test_the_sweep_in_the_batch_how_to_is_the_one_in_the_repository():
+    from sandmod.formats.tomlsource import TomlSource
+
+    page = (ROOT / "docs" / "how-to" / "batch.md").read_text(encoding="utf-8")
+    shown = next(body for language, _, body in BLOCK.findall(page) if language == "toml" and "[sweep]" in body)
+    sweep = ROOT / "docs" / "sweeps" / "friction.toml"
+    assert TomlSource.parse(shown, "batch.md").data == TomlSource.read(sweep).data

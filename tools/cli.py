@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -382,14 +384,17 @@ def validate(paths, max_memory, mod_dirs) -> None:
     from sandmod.rules.modset import is_world
     from sandmod.formats.tomlsource import TomlSource
 
+    from sandmod.rules.modset import is_sweep
+
     problems: list[Problem] = []
-    folders, mod_files, worlds = list(mod_dirs), [], []
+    folders, mod_files, worlds, sweeps = list(mod_dirs), [], [], []
     if not paths and Path("mods").is_dir():
         folders.append(Path("mods"))
     for path in paths:
-        if path.is_dir():  # its mods, and its world files as worlds
+        if path.is_dir():  # its mods, its world files as worlds, its sweeps as sweeps
             folders.append(path)
             worlds += _world_files(path)
+            sweeps += _world_files(path, is_sweep)
             continue
         try:
             data = TomlSource.read(path).data
@@ -398,30 +403,39 @@ def validate(paths, max_memory, mod_dirs) -> None:
             continue
         if is_world(data):
             worlds.append(path)
+        elif is_sweep(data):
+            sweeps.append(path)
         elif "mod" in data:
             mod_files.append(path)
         else:
             problems.append(Problem(display_path(path), 1, "", "neither a mod (no [mod] table) nor a world (no [world] table)"))
     report = check(load_registry(), folders, mod_files, worlds, _mod_folders(mod_dirs), max_memory)
+    for sweep in sweeps:
+        from sandmod.jobs.batch import read_sweep
+
+        try:
+            read_sweep(sweep, Path("."), _mod_folders(mod_dirs))
+        except ProblemsError as exc:
+            problems.extend(exc.problems)
     for warning in report.warnings:
         click.echo(printable(f"warning: {warning}"), err=True)
     if problems or report.problems:
         raise ProblemsError(problems + report.problems)
     click.echo(
         f"ok: {_counted(report.mods, 'mod')} ({_counted(report.elements, 'element')}, {_counted(report.reactions, 'reaction')}, "
-        f"{_counted(report.tests, 'test')}), {_counted(report.worlds, 'world')}"
+        f"{_counted(report.tests, 'test')}), {_counted(report.worlds, 'world')}" + (f", {_counted(len(sweeps), 'sweep')}" if sweeps else "")
     )
 
 
-def _world_files(folder: Path) -> list[Path]:
-    """The world files in a folder (those that do not read are reported with its mods)."""
+def _world_files(folder: Path, kind=None) -> list[Path]:
+    """The world files in a folder (or those ``kind`` says yes to; those that do not read are reported with its mods)."""
     from sandmod.rules.modset import is_world
     from sandmod.formats.tomlsource import TomlSource
 
     found = []
     for path in sorted(folder.glob("*.toml")):
         try:
-            if is_world(TomlSource.read(path).data):
+            if (kind or is_world)(TomlSource.read(path).data):
                 found.append(path)
         except ProblemsError:
             pass
@@ -555,6 +569,85 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
     path = Path(name if name.endswith(".toml") else f"{name}.toml")
     scaffold.check_world(text, display_path(path))
     _write_new(path, text)
+
+
+@new.command("sweep")
+@click.argument("name", callback=_name(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", "file name"))
+@click.option("--world", "world", default="world.toml", show_default=True, help="The world file it runs (relative to the sweep).")
+def new_sweep(name, world) -> None:
+    """Write NAME.toml: a commented sweep for sandmod batch, over one world, seeds and sand's friction."""
+    from sandmod.jobs import scaffold
+
+    stem = name[:-5] if name.endswith(".toml") else name
+    _write_new(Path(f"{stem}.toml"), scaffold.new_sweep(stem, world))
+
+
+@cli.command()
+@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("-o", "--output", "out", type=click.Path(file_okay=False, path_type=Path), help="Folder for the runs and the results (default: the sweep's name, here).")
+@click.option("-j", "--jobs", type=click.IntRange(1, 256), help="Worker processes (default: one per CPU).")
+@click.option("--executor", type=click.Choice(["process", "dask"]), default="process", show_default=True,
+              help="A pool of local processes, or Dask (the dask extra): a local cluster, or --scheduler's.")
+@click.option("--scheduler", metavar="ADDRESS", help="With --executor dask: an existing cluster's scheduler, e.g. tcp://host:8786.")
+@click.option("--resume", is_flag=True, help="Go on with the runs in the folder: those done are kept, the rest run.")
+@click.option("--dry-run", is_flag=True, help="List the runs and do none.")
+@_mods_option
+def batch(sweep_file, out, jobs, executor, scheduler, resume, dry_run, mod_dirs) -> None:
+    """Run a sweep: every world x seed x combination of parameters, in parallel.
+
+    Each run's files go into OUT/runs/ID/ (an animation, snapshots, its last
+    frame, its row), and appear only when the run is complete; OUT/results.csv
+    (and results.parquet, with pyarrow) has a row per run with its parameters,
+    seed, time, status and metrics, and OUT/contact_sheet.png every run's last
+    frame. The id hashes the world, the mods, the parameters, the seed and
+    sandmod's version: the same run makes the same files on any executor and
+    any number of workers. A run that fails has its error in its row; the
+    others go on (exit status 1 at the end).
+    """
+    from sandmod.jobs import batch as batching
+    from sandmod.jobs.warmup import compile_kernels, compile_new_kernels
+
+    if scheduler is not None and executor != "dask":
+        raise click.UsageError("--scheduler goes with --executor dask")
+    out = out or Path(sweep_file.stem)
+    sweep = batching.read_sweep(sweep_file, out, _mod_folders(mod_dirs))
+    runs = sweep.runs
+    if dry_run:
+        for run in runs:
+            values = ", ".join(f"{k} = {v}" for k, v in run.parameters.items())
+            click.echo(f"{run.id}  {run.world}  seed {run.seed}" + (f"  {values}" if values else ""))
+        click.echo(f"{_counted(len(runs), 'run')}")
+        return
+    folder = out / batching.RUNS
+    if folder.is_dir() and any(folder.iterdir()) and not resume:
+        raise click.UsageError(f"{display_path(out)} holds the runs of an earlier batch: --resume to go on with them, or another -o")
+    folder.mkdir(parents=True, exist_ok=True)
+    for stale in folder.glob(".*.part"):  # what a killed batch was writing
+        shutil.rmtree(stale, ignore_errors=True)
+    todo = [run for run in runs if batching.done_row(run) is None]
+    if todo:  # compiled once, and loaded here, before the workers start (forked, they have it)
+        compile_new_kernels(announce=_say)
+        compile_kernels()
+    started, finished, failed, fresh = time.perf_counter(), 0, 0, {}
+    for row in batching.run_all(todo, executor, jobs or os.cpu_count() or 1, scheduler):
+        fresh[row["id"]] = row
+        finished += 1
+        failed += row["status"] != "done"
+        elapsed = time.perf_counter() - started
+        left = elapsed / finished * (len(todo) - finished)
+        _say(f"batch: {finished} of {len(todo)} runs, {failed} failed, {left:.0f} s left")
+    rows = [fresh.get(run.id) or batching.done_row(run) for run in runs]
+    written = batching.write_table(rows, out)
+    sheet = batching.contact_sheet(rows, runs, out)
+    seconds = time.perf_counter() - started
+    rate = f", {len(todo) / seconds * 60:.1f} runs a minute" if todo and seconds > 0 else ""
+    names = ", ".join(display_path(p) for p in [*written, *([sheet] if sheet else [])])
+    click.echo(f"{_counted(len(runs), 'run')} ({len(runs) - len(todo)} done before), {failed} failed, in {seconds:.1f} s{rate}: {names}")
+    for row in fresh.values():
+        if row["status"] != "done":
+            click.echo(f"failed: {row['id']} {row['world']} seed {row['seed']}: {row['error']}", err=True)
+    if failed:
+        sys.exit(1)
 
 
 @cli.command()

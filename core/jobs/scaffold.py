@@ -188,3 +188,38 @@ def check_world(text: str, origin: str):
     from ..formats.worldspec import WorldFile
 
     return validate(WorldFile, TomlSource.parse(text, origin))
+
+
+SWEEP = """\
+# A sweep for 'sandmod batch': every world x seed x combination of parameters is a run.
+# Run it with: sandmod batch {name}.toml -j 2
+
+[sweep]
+# World files, or globs of them, relative to this file.
+worlds = [{world}]
+# Seeds: a list, or a range: {{ from = 0, to = 99 }}.
+seeds = {{ from = 0, to = 3 }}
+# Frames each run simulates (default: each world's own).
+frames = 300
+
+# A grid of values by dotted path: 'elements.NAME.FIELD' changes a mod's element,
+# 'world.FIELD' or 'render.FIELD' each world. Every combination is a run.
+[parameters]
+"elements.sand.friction" = [0.3, 0.6, 1.2]
+
+[record]
+# An animation of each run (gif, webp, apng, png-frames, a plugin's), or "none".
+format = "none"
+# Frames at which to save the whole state as a snapshot.
+snapshots = []
+
+[metrics]
+# Frames at which to measure (default: the last). Each metric is a column NAME@FRAME of
+# results.csv: count.ELEMENT, centre_x/y.ELEMENT, height/width.ELEMENT, awake, heat, plugins'.
+frames = [100, 300]
+"""
+
+
+def new_sweep(name: str, world: str) -> str:
+    """A commented sweep file over ``world``, valid as written."""
+    return SWEEP.format(name=name, world=tomli_w.dumps({"w": world}).split(" = ", 1)[1].strip())

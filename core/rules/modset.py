@@ -135,6 +135,11 @@ def is_world(data: dict) -> bool:
     return "world" in data and "mod" not in data
 
 
+def is_sweep(data: dict) -> bool:
+    """Whether a file's tables are a sweep's ([sweep], no [mod]), for ``sandmod batch``: not a mod either."""
+    return "sweep" in data and "mod" not in data
+
+
 def find_mods(registry: Registry, extra_dirs: Iterable[Path] = (), extra_files: Iterable[Path] = ()) -> ModSet:
     """Read and validate every mod the registry, ``extra_dirs`` and ``extra_files`` provide.
 
@@ -194,7 +199,7 @@ def discover_mods(
         except Exception as exc:  # the loader's bug: named with its plugin, not a traceback
             problems.append(Problem(display_path(path), None, "", f"the {loader.plugin} plugin's loader failed: {exc!r}"))
             continue
-        if not is_world(source.data):
+        if not (is_world(source.data) or is_sweep(source.data)):
             add(source, plugin)
     for entry in registry.mods:
         add(entry.value, entry.plugin)

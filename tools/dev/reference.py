@@ -64,7 +64,7 @@ def _type_text(annotation) -> str:
         return "table of " + _type_text(args[1]).replace("table", "tables")
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return "table"
-    return {int: "integer", float: "number", str: "string", bool: "true or false"}.get(annotation, str(annotation))
+    return {int: "integer", float: "number", str: "string", bool: "true or false", Any: "any value"}.get(annotation, str(annotation))
 
 
 _BOUNDS = {annotated_types.Ge: "≥", annotated_types.Gt: ">", annotated_types.Le: "≤", annotated_types.Lt: "<"}
@@ -92,6 +92,8 @@ def _default(field: FieldInfo) -> str:
     value = field.default_factory() if field.default_factory is not None else field.default
     if value is None:
         return "none"
+    if isinstance(value, BaseModel):
+        return "its fields' defaults"
     if isinstance(value, bool):
         return f"`{str(value).lower()}`"
     return f"`{value!r}`".replace("'", '"')
@@ -114,7 +116,8 @@ def _key_of(field_name: str, annotation) -> str:
     if origin is Annotated:
         return _key_of(field_name, typing.get_args(annotation)[0])
     if origin in (Union, types.UnionType):
-        return next(_key_of(field_name, a) for a in typing.get_args(annotation) if a is not type(None))
+        options = [a for a in typing.get_args(annotation) if a is not type(None)]
+        return _key_of(field_name, next((a for a in options if _models_in(a)), options[0]))
     if origin is list:
         return f"[[{field_name}]]"
     if origin is dict:
@@ -182,15 +185,17 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
 
 
 def file_reference(kind: str) -> str:
-    """Every field of a mod file (``kind`` "mod") or a world file ("world"), section by section."""
+    """Every field of a mod file (``kind`` "mod"), a world file ("world") or a sweep ("sweep"), section by section."""
     from sandmod.formats.modspec import ModFile
+    from sandmod.formats.sweepspec import SweepFile
     from sandmod.formats.worldspec import WorldFile
 
-    model = {"mod": ModFile, "world": WorldFile}[kind]
+    model = {"mod": ModFile, "world": WorldFile, "sweep": SweepFile}[kind]
     out, seen = [f"A {kind} file holds these tables:", ""] + _table(model.model_fields) + [""], set()
     for name, field in model.model_fields.items():
-        key = _key_of(field.alias or name, field.annotation)
-        out += _sections(key, _models_in(field.annotation), seen)
+        key, models = _key_of(field.alias or name, field.annotation), _models_in(field.annotation)
+        if models:  # a table of its own (a plain value is in the table above)
+            out += _sections(key, models, seen)
     return "\n".join(out)
 
 
@@ -290,6 +295,7 @@ def changelog() -> str:
 PAGES = {
     "docs/reference/mod-files.md": lambda: file_reference("mod"),
     "docs/reference/world-files.md": lambda: file_reference("world"),
+    "docs/reference/sweep-files.md": lambda: file_reference("sweep"),
     "docs/reference/cli.md": cli_reference,
     "docs/reference/python.md": api_reference,
     "docs/changelog.md": changelog,
