@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import filecmp
-import os
 import signal
 import subprocess
 import sys
@@ -167,3 +166,36 @@ def test_new_sweep_writes_one_that_runs(tmp_path, monkeypatch):
     assert invoke("new", "sweep", "friction").exit_code == 0
     result = invoke("batch", "friction.toml", "--dry-run")
     assert result.exit_code == 0 and result.output.strip().endswith("12 runs")  # 4 seeds x 3 frictions
+
+
+def test_metrics_are_the_built_in_ones_and_the_plugins(sweep):
+    from sandmod.world.loading import load_world
+
+    world = load_world("worlds/heap.toml").world
+    for _ in range(30):
+        world.step()
+    values = batching.measure(world, None, {"top": lambda w: 3.0, "span": lambda w: {"a": 1, "b": 2.5}})
+    assert values["count.sand:sand"] > 0 and values["height.base:stone"] == 4 and values["width.base:stone"] == 48
+    assert values["top"] == 3.0 and values["span.a"] == 1.0 and values["span.b"] == 2.5 and "awake" in values and "heat" in values
+    assert set(batching.measure(world, ["awake"], {"top": lambda w: 1})) == {"awake"}
+
+
+def test_a_plugin_registers_a_metric():
+    from sandmod import hooks
+    from sandmod.registry import collect, make_plugin_manager
+
+    class Plugin:
+        @hooks.hookimpl
+        def register_metrics(self, register):
+            register("top", lambda world: 1.0)
+
+    pm = make_plugin_manager(entry_points=False)
+    pm.register(Plugin(), name="metric-plugin")
+    registry = collect(pm)
+    assert registry.metrics["top"].plugin == "metric-plugin" and registry.metrics["top"].value(None) == 1.0
+
+
+def test_too_many_runs_is_a_problem(sweep):
+    sweep.write_text(sweep.read_text().replace("seeds = { from = 0, to = 1 }", "seeds = { from = 0, to = 99999 }"))
+    result = invoke("batch", str(sweep), "-o", "out", "--dry-run")
+    assert result.exit_code == 2 and "400000 runs: at most 100000 in one sweep" in result.output

@@ -635,7 +635,11 @@ def batch(sweep_file, out, jobs, executor, scheduler, resume, dry_run, mod_dirs)
         failed += row["status"] != "done"
         elapsed = time.perf_counter() - started
         left = elapsed / finished * (len(todo) - finished)
-        _say(f"batch: {finished} of {len(todo)} runs, {failed} failed, {left:.0f} s left")
+        line = f"batch: {finished} of {len(todo)} runs, {failed} failed, {left:.0f} s left"
+        if sys.stderr.isatty():  # one line, redrawn
+            click.echo(f"\r{line}   " + ("\n" if finished == len(todo) else ""), err=True, nl=False)
+        else:
+            _say(line)
     rows = [fresh.get(run.id) or batching.done_row(run) for run in runs]
     written = batching.write_table(rows, out)
     sheet = batching.contact_sheet(rows, runs, out)

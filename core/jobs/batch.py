@@ -30,7 +30,7 @@ import numpy as np
 from .. import __version__
 from ..errors import Problem, ProblemsError, display_path
 from ..formats.recording import VideoSettings, atomic_path, write_png
-from ..formats.sweepspec import SweepFile
+from ..formats.sweepspec import MAX_RUNS, SweepFile
 from ..formats.tomlsource import TomlSource
 from ..formats.userfiles import Refused, inside
 from ..formats.validation import validate
@@ -75,6 +75,9 @@ def read_sweep(path: Path, out: Path, mod_dirs: Iterable[Path] = ()) -> Sweep:
     folder = source.folder or Path(".")
     worlds = _worlds(spec, source, folder)
     grid = sorted(spec.parameters.items())
+    count = len(worlds) * math.prod(len(values) for _, values in grid) * len(spec.sweep.seed_list())
+    if count > MAX_RUNS:
+        raise ProblemsError([source.problem(("sweep",), f"{count} runs: at most {MAX_RUNS} in one sweep")])
     combos = list(itertools.product(*(values for _, values in grid)))
     for world_name, world_path in worlds:
         extra = [str(d) for d in mod_folders(mod_dirs, world_path)]
