@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import json
 import os
 import shutil
@@ -609,6 +610,8 @@ def batch(sweep_file, out, jobs, executor, scheduler, resume, dry_run, mod_dirs)
 
     if scheduler is not None and executor != "dask":
         raise click.UsageError("--scheduler goes with --executor dask")
+    if executor == "dask" and importlib.util.find_spec("distributed") is None:
+        raise click.ClickException('the dask executor needs dask: pip install "sandmod[dask]"')
     out = out or Path(sweep_file.stem)
     sweep = batching.read_sweep(sweep_file, out, _mod_folders(mod_dirs))
     runs = sweep.runs
@@ -794,8 +797,6 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
     Saving a mod file while playing reloads the mods within a second; a
     mistake in it is shown and the old rules go on.
     """
-    import importlib.util
-
     if importlib.util.find_spec("pygame") is None:
         raise click.ClickException('sandmod play needs pygame-ce: pip install "sandmod[play]"')
     from sandmod.jobs import play as window
