@@ -305,9 +305,11 @@ def _recorder(loaded, run: Run, work: Path):
 
 
 def _worker_start() -> None:
-    """A worker process: one numba thread (the workers are the parallelism), and on Linux gone
-    with the batch (a batch killed outright must not leave workers writing into its folder)."""
-    os.environ["NUMBA_NUM_THREADS"] = "1"
+    """A worker process: one numba thread (the workers are the parallelism; each run steps on one
+    thread in any case), and on Linux gone with the batch (a batch killed outright must not leave
+    workers writing into its folder)."""
+    if "numba" not in sys.modules:  # a fresh interpreter; a forked one keeps numba's settings as they are
+        os.environ["NUMBA_NUM_THREADS"] = "1"
     if sys.platform.startswith("linux"):
         import ctypes
         import signal
