@@ -127,6 +127,8 @@ def _check(world_path: Path, parameters: dict[str, Any], mod_dirs: list[str], sw
         _load(str(world_path), parameters, mod_dirs, None)
     except ProblemsError as error:
         raise ProblemsError([sweep_source.problem(("parameters",), f"{p}") for p in error.problems]) from None
+    except ValueError as error:
+        raise ProblemsError([sweep_source.problem(("parameters",), str(error))]) from None
 
 
 # --- one run, in a worker ---------------------------------------------------------------------
@@ -136,10 +138,7 @@ def _load(world_path: str, parameters: dict[str, Any], mod_dirs: Iterable[str], 
     """The world file loaded with the parameters applied: 'world.X' and 'render.X' to its tables,
     'elements.NAME.FIELD' to the element NAME of whichever mod defines it."""
     from ..formats.worldspec import WorldFile
-    from ..rules.compiler import compile_mods
-    from ..rules.modset import find_mods
-    from ..world.loading import LoadedWorld, _select_for_world, load_registry, mod_warnings
-    from ..world.scene import build_world
+    from ..world.loading import load_world_spec, world_rules
 
     path = Path(world_path)
     source = TomlSource.read(path)
@@ -150,41 +149,42 @@ def _load(world_path: str, parameters: dict[str, Any], mod_dirs: Iterable[str], 
             data.setdefault(table, {})[key] = value
     source = TomlSource(source.name, source.text, data, source.positions, source.path, source.folder)
     spec = validate(WorldFile, source)
-    key = json.dumps([list(mod_dirs), spec.world.mods, {k: v for k, v in parameters.items() if k.startswith("elements.")}], default=str)
+    values = {name: value for name, value in parameters.items() if name.startswith("elements.")}
+    key = json.dumps([list(mod_dirs), spec.world.mods, values], default=str)
     if key not in _RULESETS:  # a worker compiles each set of mods and values once
-        registry = load_registry()
-        modset = find_mods(registry, [Path(d) for d in mod_dirs])
-        selected = _select_for_world(modset, spec, source)
-        element_values = {name: value for name, value in parameters.items() if name.startswith("elements.")}
-        if element_values:
-            selected = [_with_values(mod, element_values) for mod in selected]
-        _RULESETS[key] = (registry, compile_mods(selected))
-    registry, ruleset = _RULESETS[key]
-    world = build_world(spec, ruleset, source, seed)
-    return LoadedWorld(path, spec, source, ruleset, world, registry, mod_warnings(spec, source, ruleset))
+        dirs = [Path(d) for d in mod_dirs]
+        _RULESETS[key] = world_rules(spec, source, path, mod_dirs=dirs, change=lambda mods: _with_values(mods, values))
+    return load_world_spec(spec, source, path, seed=seed, rules=_RULESETS[key])
 
 
-def _with_values(mod, values: dict[str, Any]):
-    """A loaded mod with the parameters that name its elements set (validated as a file's values are)."""
+def _with_values(mods: list, values: dict[str, Any]) -> list:
+    """The loaded mods with the parameters that name their elements set (validated as a file's values
+    are). ProblemsError for a parameter whose element no loaded mod defines."""
     from ..formats.modspec import ModFile
     from ..rules.modset import LoadedMod
 
-    data = json.loads(json.dumps(mod.source.data))
-    changed = False
-    for name, value in values.items():
-        _, element, *fields = name.split(".")  # elements.NAME.FIELD[.FIELD]; NAME may be 'mod:name'
-        owner, _, own = element.rpartition(":")
-        table = data.get("elements", {}).get(own)
-        if table is None or owner not in ("", mod.name):
+    changed, used = [], set()
+    for mod in mods:
+        data = json.loads(json.dumps(mod.source.data))
+        for name, value in values.items():
+            _, element, *fields = name.split(".")  # elements.NAME.FIELD[.FIELD]; NAME may be 'mod:name'
+            owner, _, own = element.rpartition(":")
+            table = data.get("elements", {}).get(own)
+            if table is None or owner not in ("", mod.name):
+                continue
+            for parent in fields[:-1]:
+                table = table.setdefault(parent, {})
+            table[fields[-1]] = value
+            used.add(name)
+        if data == mod.source.data:
+            changed.append(mod)
             continue
-        for parent in fields[:-1]:
-            table = table.setdefault(parent, {})
-        table[fields[-1]] = value
-        changed = True
-    if not changed:
-        return mod
-    source = TomlSource(mod.source.name, mod.source.text, data, mod.source.positions, mod.source.path, mod.source.folder)
-    return LoadedMod(validate(ModFile, source), source, mod.plugin)
+        source = TomlSource(mod.source.name, mod.source.text, data, mod.source.positions, mod.source.path, mod.source.folder)
+        changed.append(LoadedMod(validate(ModFile, source), source, mod.plugin))
+    unused = [name for name in values if name not in used]
+    if unused:
+        raise ValueError(f"{unused[0]}: no element of the world's mods ({', '.join(m.name for m in mods)}) is called that")
+    return changed
 
 
 def measure(world, names: list[str] | None, plugins: dict[str, Callable]) -> dict[str, float]:

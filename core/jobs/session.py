@@ -22,7 +22,7 @@ from ..errors import ProblemsError
 from ..formats.tomlsource import TomlSource
 from ..formats.validation import validate
 from ..formats.worldspec import Event, WorldFile
-from ..world.loading import LoadedWorld, load_world_spec, mod_folders, read_world_spec
+from ..world.loading import LoadedWorld, load_world_spec, mod_folders, read_world_spec, world_rules
 from ..world.scene import add_event, build_world
 from ..world.world import World
 
@@ -144,16 +144,14 @@ class Session:
         tables' contents, never its code."""
         base = self.loaded
         try:
-            fresh = load_world_spec(self._starting_spec(), base.source, base.path, mod_dirs=self.mod_dirs, registry=None)
+            rules = world_rules(self._starting_spec(), base.source, base.path, mod_dirs=self.mod_dirs)
         except ProblemsError as error:
             return [str(problem) for problem in error.problems]
         with tempfile.TemporaryDirectory(prefix="sandmod-play-") as scratch:
             snapshot = Path(scratch) / "world.npz"
             self.world.save_snapshot(snapshot)
-            threads = self.world.threads
-            self.loaded = fresh
-            self.world.threads = threads
-            self._rebuild(fresh.ruleset)
+            self.loaded = replace(base, registry=rules.registry, ruleset=rules.ruleset)
+            self._rebuild(rules.ruleset)
             try:
                 self.world.load_snapshot(snapshot)
             except ProblemsError as error:  # an element the world holds is gone: keep the old rules

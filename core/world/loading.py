@@ -12,14 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Callable, Iterable, NamedTuple, Sequence
 
 import pluggy
 
 from ..rules.compiler import Ruleset, compile_mods
 from ..errors import Problem
 from ..formats.limits import DEFAULT_MAX_MEMORY, MemoryBudget
-from ..rules.modset import ModSet, find_mods
+from ..rules.modset import LoadedMod, ModSet, find_mods
 from ..registry import Registry, collect, make_plugin_manager
 from ..formats.tomlsource import TomlSource
 from ..formats.validation import validate
@@ -116,17 +116,41 @@ def load_world_spec(
     seed: int | None = None,
     registry: Registry | None = None,
     max_memory: int | None = DEFAULT_MAX_MEMORY,
+    rules: WorldRules | None = None,
 ) -> LoadedWorld:
     """:func:`load_world` for a world file already read (or made in memory: ``path`` names it,
-    and its folder is where mods beside it are looked for)."""
+    and its folder is where mods beside it are looked for); with ``rules``, under those."""
     from .scene import build_world
 
-    registry = registry or load_registry()
-    modset: ModSet = find_mods(registry, mod_folders(mod_dirs, path))
-    ruleset = compile_mods(_select_for_world(modset, spec, source))
+    registry, modset, ruleset = rules or world_rules(spec, source, path, mod_dirs=mod_dirs, registry=registry)
     memory = MemoryBudget(max_memory)
     world = build_world(spec, ruleset, source, seed, memory, _unloaded_elements(modset, ruleset))
     return LoadedWorld(path, spec, source, ruleset, world, registry, mod_warnings(spec, source, ruleset), memory)
+
+
+class WorldRules(NamedTuple):
+    """The plugins, the mods found, and the ruleset a world file's mods compile to."""
+
+    registry: Registry
+    modset: ModSet
+    ruleset: Ruleset
+
+
+def world_rules(
+    spec: WorldFile,
+    source: TomlSource,
+    path: Path,
+    *,
+    mod_dirs: Iterable[Path] = (),
+    registry: Registry | None = None,
+    change: Callable[[list[LoadedMod]], list[LoadedMod]] | None = None,
+) -> WorldRules:
+    """Find the mods as the command line does and compile those the world asks for (``change``
+    may alter them first: a sweep's parameters). ProblemsError names what is wrong."""
+    registry = registry or load_registry()
+    modset: ModSet = find_mods(registry, mod_folders(mod_dirs, path))
+    selected = _select_for_world(modset, spec, source)
+    return WorldRules(registry, modset, compile_mods(change(selected) if change else selected))
 
 
 def mod_warnings(spec: WorldFile, source: TomlSource, ruleset: Ruleset) -> list[Problem]:
