@@ -142,3 +142,14 @@ def test_save_session_writes_the_world_file_when_the_window_closes():
     post(pygame.KEYDOWN, key=pygame.K_ESCAPE, mod=0, unicode="")
     play.run(frames=50)
     assert "paint" in Path("play-session.toml").read_text()
+
+
+def test_a_square_brush_paints_a_square():
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    play.brush.element = play.session.world.ruleset.index("stone")
+    key(play, pygame.K_b)
+    post(pygame.MOUSEBUTTONDOWN, pos=at(10, 10), button=1)
+    post(pygame.MOUSEBUTTONUP, pos=at(10, 10), button=1)
+    frames(play, 1)
+    stone = play.session.world.cells == play.brush.element
+    assert stone.sum() == 25 and stone[8:13, 8:13].all()

@@ -77,3 +77,9 @@ def test_rect_circle_and_fill():
 def test_python_dash_m_runs_the_cli():
     result = subprocess.run([sys.executable, "-m", "sandmod", "--help"], capture_output=True, text=True)
     assert result.returncode == 0 and "render" in result.stdout
+
+
+def test_a_square_brush_is_a_square_dragged_along_the_line():
+    assert sorted(brush_offsets(2, square=True)) == sorted(brush_offsets(2)) and len(brush_offsets(5, square=True)) == 25
+    mask = line_mask(20, 20, (5, 5), (10, 10), 3, square=True)
+    assert mask[4:7, 4:7].all() and mask[9:12, 9:12].all() and mask[4, 6] and not mask[4, 8]

@@ -138,6 +138,7 @@ class LineArea(_Strict):
     first: Point = Field(alias="from", description="First cell, [x, y].")
     last: Point = Field(alias="to", description="Last cell, [x, y].")
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
+    brush: Literal["round", "square"] = Field("round", description="The brush's shape: round, or a square 'thickness' cells a side.")
 
 
 class StrokeArea(_Strict):
@@ -146,6 +147,7 @@ class StrokeArea(_Strict):
     shape: Literal["stroke"]
     points: list[Point] = Field(min_length=2, max_length=4096, description="The corners, [[x, y], ...], in order.")
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
+    brush: Literal["round", "square"] = Field("round", description="The brush's shape: round, or a square 'thickness' cells a side.")
 
     @field_validator("points")
     @classmethod

@@ -240,12 +240,9 @@ class Play:
     def _apply(self, start: tuple[int, int], end: tuple[int, int]) -> None:
         """The brush from ``start`` to ``end`` (cells), as a session event."""
         brush, world = self.brush, self.session.world
+        shape = {"shape": "stroke", "points": [list(start), list(end)], "thickness": brush.size}
         if brush.square:
-            half = brush.size // 2
-            x0, y0 = min(start[0], end[0]) - half, min(start[1], end[1]) - half
-            shape = {"shape": "rect", "x": x0, "y": y0, "width": abs(end[0] - start[0]) + brush.size, "height": abs(end[1] - start[1]) + brush.size}
-        else:
-            shape = {"shape": "stroke", "points": [list(start), list(end)], "thickness": brush.size}
+            shape["brush"] = "square"
         try:
             if self.stroke == "erase":
                 self.session.add("erase", shape)

@@ -43,9 +43,9 @@ def shape_mask(shape: RectArea | CircleArea | LineArea | StrokeArea | FillArea, 
     if isinstance(shape, CircleArea):
         return circle_mask(width, height, shape.x, shape.y, shape.radius)
     if isinstance(shape, LineArea):
-        return stroke_mask(width, height, [tuple(shape.first), tuple(shape.last)], shape.thickness)
+        return stroke_mask(width, height, [tuple(shape.first), tuple(shape.last)], shape.thickness, shape.brush == "square")
     if isinstance(shape, StrokeArea):
-        return stroke_mask(width, height, [tuple(p) for p in shape.points], shape.thickness)
+        return stroke_mask(width, height, [tuple(p) for p in shape.points], shape.thickness, shape.brush == "square")
     x, y = shape.at
     if not (0 <= x < width and 0 <= y < height):
         return np.zeros_like(cells, bool)

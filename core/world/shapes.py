@@ -29,28 +29,28 @@ def circle_mask(width: int, height: int, cx: int, cy: int, radius: float) -> np.
     return mask
 
 
-def brush_offsets(diameter: int) -> list[tuple[int, int]]:
-    """The cells of a round brush ``diameter`` cells across, around (0, 0).
+def brush_offsets(diameter: int, square: bool = False) -> list[tuple[int, int]]:
+    """The cells of a round (or ``square``) brush ``diameter`` cells across, around (0, 0).
 
     Odd sizes centre on the cell, even sizes on its top-left corner; 1 is one
-    cell, 2 a 2x2 block, 3 a 3x3 block, larger sizes discs.
+    cell, 2 a 2x2 block, 3 a 3x3 block, larger round sizes discs.
     """
     low = -(diameter // 2)
     centre = low + (diameter - 1) / 2
     span = range(low, low + diameter)
-    limit = (diameter / 2) ** 2
+    limit = float("inf") if square else (diameter / 2) ** 2
     return [(ox, oy) for oy in span for ox in span if (ox - centre) ** 2 + (oy - centre) ** 2 <= limit]
 
 
-def line_mask(width: int, height: int, start: tuple[int, int], end: tuple[int, int], thickness: int) -> np.ndarray:
+def line_mask(width: int, height: int, start: tuple[int, int], end: tuple[int, int], thickness: int, square: bool = False) -> np.ndarray:
     """A brush of diameter ``thickness`` dragged along the line traversal from start to end."""
-    return stroke_mask(width, height, [start, end], thickness)
+    return stroke_mask(width, height, [start, end], thickness, square)
 
 
-def stroke_mask(width: int, height: int, points, thickness: int) -> np.ndarray:
-    """A brush of diameter ``thickness`` dragged along the line traversal from each point to the next."""
+def stroke_mask(width: int, height: int, points, thickness: int, square: bool = False) -> np.ndarray:
+    """A round (or ``square``) brush ``thickness`` cells across, dragged along the line traversal from each point to the next."""
     mask = np.zeros((height, width), bool)
-    offsets = brush_offsets(thickness)
+    offsets = brush_offsets(thickness, square)
     reach = thickness // 2 + 1
     for (x0, y0), (x1, y1) in zip(points, points[1:]):
         cells = line_cells(x0, y0, x1, y1)
