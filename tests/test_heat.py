@@ -102,10 +102,8 @@ def uniform(ruleset, name, celsius, size=6):
 @pytest.mark.parametrize(
     ("name", "threshold", "direction", "into"),
     [
-        ("water", 100, +1, "steam"),
         ("water", 0, -1, "ice"),
         ("ice", 0, +1, "water"),
-        ("steam", 60, -1, "water"),
         ("lava", 900, -1, "stone"),
         ("stone", 1300, +1, "lava"),
         ("sand", 1100, +1, "glass"),
@@ -117,6 +115,42 @@ def test_each_phase_change_happens_past_its_threshold_and_not_before(ruleset, na
     past = run(uniform(ruleset, name, threshold + direction * 0.5), 1)
     assert set(past.counts()) == {ruleset.elements[ruleset.index(into)].id}
     assert np.allclose(past.temperature(), threshold + direction * 0.5)  # it keeps its temperature
+
+
+def test_boiling_takes_its_latent_heat_and_condensing_gives_it_back_so_nothing_flickers(ruleset):
+    water, steam = (ruleset.elements[ruleset.index(name)].spec for name in ("water", "steam"))
+    latent, spread = water.heated.latent_heat, water.heated.spread
+    assert steam.cooled.latent_heat == latent and 95 <= steam.cooled.below < water.heated.above
+    # Water at its boiling point stays water; past it by its spread, it boils within a few frames,
+    # its heat less the latent heat making the steam far hotter than the point where it condenses.
+    assert set(run(uniform(ruleset, "water", 100), 40).counts()) == {"water:water"}
+    hot = 100 + spread + 0.5
+    boiled = run(uniform(ruleset, "water", hot), 12)
+    assert set(boiled.counts()) == {"water:steam"}
+    born = (hot * water.heat_capacity - latent) / steam.heat_capacity
+    # (cells that boiled on different frames then trade some heat)
+    assert abs(boiled.temperature().mean() - born) < 3 and boiled.temperature().min() > steam.cooled.below + 20
+    # Steam at its condensation point stays steam; just below it, it condenses at once, given the
+    # latent heat back: water below its boiling point, which does not boil again.
+    assert set(run(uniform(ruleset, "steam", steam.cooled.below), 40).counts()) == {"water:steam"}
+    cold = steam.cooled.below - 0.5
+    condensed = run(uniform(ruleset, "steam", cold), 1)
+    assert set(condensed.counts()) == {"water:water"}
+    back = (cold * steam.heat_capacity + latent) / water.heat_capacity
+    assert np.allclose(condensed.temperature(), back, atol=0.1) and back < 100
+    assert set(run(condensed, 40).counts()) == {"water:water"}
+
+
+def test_a_floor_heated_evenly_boils_in_bubbles_not_a_sheet(ruleset):
+    # A row of water far past its boiling point: a chance a frame, rolled for blocks of cells
+    # together, boils it over several frames, never the whole row on the first.
+    world = uniform(ruleset, "water", 200, size=64)
+    steam = ruleset.index("steam")
+    firsts = []
+    for _ in range(30):
+        run(world, 1)
+        firsts.append(int((world.cells == steam).sum()))
+    assert 0 < firsts[0] < 64 * 64 * 0.75 and firsts[-1] == 64 * 64
 
 
 def test_titanium_over_lava_conducts_but_never_melts(ruleset):

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import hashing, traversal
 from .jit import compiled, inlined
-from .layout import ARCHETYPE_CODES, BURNING, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, REACTED, SCORCHED, TEMP_ONE
+from .layout import ARCHETYPE_CODES, BURNING, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, PLUME, PLUME_RUN, PLUME_RUN_SHIFT, PLUME_SHIFT, REACTED, SCORCHED, TEMP_ONE
 
 STATIC = ARCHETYPE_CODES["static"]
 POWDER = ARCHETYPE_CODES["powder"]
@@ -23,6 +23,7 @@ DONE = MOVED | REACTED  # flag bits of a cell no other may move this frame
 KEPT = LOOSE | BURNING | SCORCHED  # flag bits that travel with a cell from frame to frame
 CARRIED = KEPT | REACTED  # and those it takes along when it moves (REACTED until the frame ends)
 FRESH = ~(BURNING | SCORCHED)  # a cell turning into another element keeps only these flag bits
+SALT_RUN = 0x5BD1E995
 T_LOW = int(MIN_TEMPERATURE * TEMP_ONE)
 T_HIGH = int(MAX_TEMPERATURE * TEMP_ONE)
 
@@ -59,6 +60,26 @@ def _inside(x, y, width, height):
 def _cell_key(key, x, y):
     """The hash of cell (x, y) under a frame key."""
     return _mix32(key ^ ((y << 16) | x))
+
+
+@compiled
+def _plume_roll(key, x, y):
+    """The exchange roll of cell (x, y) this frame: one hash for every cell of its plume block
+    (see :data:`~.layout.PLUME`), so that the cells of a block trade places with fluids together.
+    The grid's columns shift with the frame's key, and each column of blocks is shifted up or
+    down by a hash of its own, as bricks are laid, so that no edge runs along a whole row."""
+    bx = (x + (key & (PLUME - 1))) >> PLUME_SHIFT
+    by = (y + (_mix32(key ^ bx) & (PLUME_RUN - 1))) >> PLUME_RUN_SHIFT
+    return _mix32(key ^ ((by << 16) | bx))
+
+
+@compiled
+def _run_end(key, x, y, g):
+    """The last row, going against ``g`` (up, for a faller), of the run of PLUME_RUN rows that row
+    y of column x is in this frame (each column's runs shifted by a hash of its own)."""
+    shift = _mix32(key ^ SALT_RUN ^ x) & (PLUME_RUN - 1)
+    first = (((y + shift) >> PLUME_RUN_SHIFT) << PLUME_RUN_SHIFT) - shift
+    return first if g > 0 else first + PLUME_RUN - 1
 
 
 @compiled

@@ -11,9 +11,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cells import DONE, FRESH, MOVED, _at, _cell_key, _inside, _mix32, _temperature, become
-from .jit import inlined
+from .cells import DONE, FRESH, MOVED, _at, _cell_key, _inside, _mix32, _plume_roll, _temperature, become
+from .jit import compiled, inlined
 from .layout import BURNING, DETONATING, EXPLOSIVE, FLAMMABLE, IGNITES, LOOSE, TEMP_ONE
+
+
+SURE_CHANGE = 128  # of 256: the most a phase change with a spread comes about in a frame
+
+
+@compiled
+def _comes_about(past, spread, fire_key, x, y):
+    """Does a phase change come about this frame, ``past`` the point (in energy) by a ``spread``?
+    Without one, at once; with one, by a chance that grows with how far past the point the cell is,
+    up to SURE_CHANGE at the spread's end, rolled once for each plume block of cells: a floor heated
+    evenly, however hot, boils in bubbles, not as one sheet."""
+    if spread == 0:
+        return True
+    return (_plume_roll(fire_key, x, y) >> 24) < min(SURE_CHANGE, (past * SURE_CHANGE) // spread)
 
 
 @inlined
@@ -30,10 +44,13 @@ def heat_and_fire(s, t, x, y, e, fire_key, spawn_key, detonations, tile):
     born = np.int64(0)
     energy = int(heat[_at(y, x)])
     into = e
+    keeps, gain = True, 0  # a phase change keeps the temperature, or, with a latent heat, the heat plus gain
     if energy > t.hot_limit[e]:
-        into = t.heated_into[e]
+        if _comes_about(energy - t.hot_limit[e], t.hot_spread[e], fire_key, x, y):
+            into, keeps, gain = t.heated_into[e], t.hot_latent[e] < 0, -t.hot_latent[e]
     elif energy < t.cold_limit[e]:
-        into = t.cooled_into[e]
+        if _comes_about(t.cold_limit[e] - energy, t.cold_spread[e], fire_key, x, y):
+            into, keeps, gain = t.cooled_into[e], t.cold_latent[e] < 0, t.cold_latent[e]
     elif (th & FLAMMABLE) != 0 and (f & BURNING) == 0 and energy >= t.ignite_limit[e]:
         f |= BURNING
         s.timer[_at(y, x)] = t.burn_frames[e] + (_cell_key(fire_key, x, y) >> 8) % (t.burn_jitter[e] + 1)
@@ -49,7 +66,8 @@ def heat_and_fire(s, t, x, y, e, fire_key, spawn_key, detonations, tile):
     if into == e and ((f & BURNING) != 0 or (th & IGNITES) != 0):
         busy = _light(s, t, x, y, fh, fire_key) or busy
     if into != e:
-        born |= become(s, t, x, y, into, _temperature(energy, t.heat_recip[e]), (f & FRESH) | MOVED, _cell_key(spawn_key, x, y))
+        temperature = _temperature(energy, t.heat_recip[e]) if keeps else _temperature(energy + gain, t.heat_recip[into])
+        born |= become(s, t, x, y, into, temperature, (f & FRESH) | MOVED, _cell_key(spawn_key, x, y))
         return True, True, True, born
     if energy != heat[_at(y, x)]:
         heat[_at(y, x)] = energy

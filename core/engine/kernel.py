@@ -37,13 +37,13 @@ from __future__ import annotations
 import numpy as np
 
 from .blasts import explode, take_detonations  # noqa: F401  (the kernel's whole interface is here)
-from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _cell_key, _enterable, _mix32, _within, swap
+from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _enterable, _mix32, _plume_roll, _within
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
-from .heat import conduct, stirs
+from .heat import conduct
 from .jit import compiled, in_place, inlined, numba, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
-from .moves import fluid_near, move
+from .moves import fluid_near, move, sink_run
 from .paint import paint_cells  # noqa: F401
 from .prefetch import prefetch
 from .reactions import lifetime, react
@@ -93,8 +93,8 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, ambient, y
     """The fast loop: the cells of row y's segment sx0..sx1-1 from its ``n``-th on (in the row's
     direction) that need little, in a loop that holds few values (registers, not the stack): cells
     at rest that nothing around them can move (a resting fluid that nothing it could displace is
-    next to, a resting grain, a static cell), and a straight fall into a fluid that knocks nothing
-    loose. Stops at the first cell that needs more. Returns how far it got (the segment's length
+    next to, a resting grain, a static cell), and a straight sink into a fluid by a grain at rest,
+    with the run behind it (:func:`~.moves.sink_run`). Stops at the first cell that needs more. Returns how far it got (the segment's length
     when done), that cell and its element, whether only its move is left to decide (``ready``),
     and the boxes of the cells it changed and stirred."""
     cells, flags, heat, vx, vy = s.cells, s.flags, s.heat, s.vx, s.vy
@@ -142,21 +142,18 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, ambient, y
         if below == 0 or ty >= y1 or not (0 < x and x + 1 < width and 0 < y):
             break  # falling through empty cells, into another tile's cells, or at the world's edge
         threshold = t.displace[e, below]
-        if threshold != ALWAYS and (_cell_key(exchange_key, x, y) >> 24) >= threshold:
+        if threshold != ALWAYS and (_plume_roll(exchange_key, x, y) >> 24) >= threshold:
             busy_box = _box_with(busy_box, x, x, y, y)  # it waits for its chance to sink
             n += 1
             continue
-        if (flags[_at(y, x - 1)] & flags[_at(y, x + 1)] & flags[_at(y - 1, x - 1)] & flags[_at(y - 1, x + 1)] & flags[_at(ty, x - 1)] & flags[_at(ty, x + 1)] & LOOSE) == 0:
-            break  # it may knock a resting grain loose
-        # Straight into a fluid: one cell, its speed lost, nothing knocked.
-        stir = stirs(int(heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(heat[_at(ty, x)]), t.heat_cap[below], t.cooling[below], ambient)
-        swap(s, x, y, x, ty, False)
+        # Straight into a fluid: one cell, its speed lost (sinking knocks nothing loose).
+        ry, stir = sink_run(s, t, x, y, ty - y, exchange_key, ambient)  # the grains above it follow
         vx[_at(ty, x)] = 0
         vy[_at(ty, x)] = 0
-        flags[_at(ty, x)] = MOVED | LOOSE | (f & (CARRIED & ~LOOSE))
-        busy_box = _box_with(busy_box, x, x, min(y, ty), max(y, ty))
+        flags[_at(ty, x)] = MOVED | (f & CARRIED)  # at rest it sinks at rest: it lands without sliding
+        busy_box = _box_with(busy_box, x, x, ry, ty)
         if stir:
-            stir_box = _box_with(stir_box, x, x, min(y, ty), max(y, ty))
+            stir_box = _box_with(stir_box, x, x, ry, ty)
         n += 1
     return n, x, e, ready, busy_box, stir_box
 
@@ -173,17 +170,17 @@ def _update_cell(s, t, x, y, e, ready, present, keys, detonations, tile, forward
         done, busy, stir, born = heat_and_fire(s, t, x, y, e, fire_key, spawn_key, detonations, tile)
         present |= born
         if done:
-            return busy, stir, present, x, y
+            return busy, stir, present, x, y, y
         done, b, st, born = lifetime(s, t, x, y, e, spawn_key)
         busy, stir, present = busy or b, stir or st, present | born
         if done:
-            return busy, stir, present, x, y
+            return busy, stir, present, x, y, y
         done, b, st, born = react(s, t, x, y, e, present, move_key, react_key, spawn_key)
         busy, stir, present = busy or b, stir or st, present | born
         if done:
-            return busy, stir, present, x, y
-    b, st, born, px, py = move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, forward, x0, y0, x1, y1, frame, ambient)
-    return busy or b, stir or st, present | born, px, py
+            return busy, stir, present, x, y, y
+    b, st, born, px, py, ry = move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, forward, x0, y0, x1, y1, frame, ambient)
+    return busy or b, stir or st, present | born, px, py, ry
 
 
 @in_place
@@ -264,11 +261,11 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                     if e == 0 or (s.flags[_at(y, x)] & MOVED) != 0:
                         n += 1
                         continue  # its turn is over: it moved, or changed
-                busy, stir, present, px, py = _update_cell(s, t, x, y, e, ready, present, keys, detonations, tile, forward, x0, y0, x1, y1, frame, ambient)
+                busy, stir, present, px, py, ry = _update_cell(s, t, x, y, e, ready, present, keys, detonations, tile, forward, x0, y0, x1, y1, frame, ambient)
                 if busy:  # the cells it moved between go in the segment's boxes
-                    busy_box = _box_with(busy_box, min(x, px), max(x, px), min(y, py), max(y, py))
+                    busy_box = _box_with(busy_box, min(x, px), max(x, px), min(y, py, ry), max(y, py, ry))
                     if stir:
-                        stir_box = _box_with(stir_box, min(x, px), max(x, px), min(y, py), max(y, py))
+                        stir_box = _box_with(stir_box, min(x, px), max(x, px), min(y, py, ry), max(y, py, ry))
                 n += 1
             if busy_box[0] <= busy_box[1]:  # wake every cell within two cells of the box
                 wx0, wy0, wx1, wy1 = _grown(busy_box[0], busy_box[2], busy_box[1], busy_box[3], width, height)

@@ -42,6 +42,16 @@ BURNING = 8  # on fire: the timer counts down the burning time
 SCORCHED = 16  # darkened by a blast
 DETONATING = 32  # an explosive going off this frame (its blast comes after the step)
 
+# Exchanges between fluids are rolled per plume block (PLUME columns by PLUME_RUN rows), not
+# per cell: the cells of a block sink or rise together (plumes and fingers, not static). A
+# faller that sinks into a fluid takes the fallers above it in its run of PLUME_RUN rows down
+# with it, and the fluid rises to the run's top, so no comb of alternating rows forms. The
+# grid of blocks and each column's runs shift every frame.
+PLUME_SHIFT = 2
+PLUME = 1 << PLUME_SHIFT
+PLUME_RUN_SHIFT = 4
+PLUME_RUN = 1 << PLUME_RUN_SHIFT
+
 # Sleeping chunks and parallel tiles. The world is cut into chunks of CHUNK x CHUNK
 # cells; a chunk is updated only while something in it or within WAKE_MARGIN cells
 # of it changes. Tiles of 2 x 2 chunks are updated in four passes, the tiles of

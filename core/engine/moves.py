@@ -46,6 +46,8 @@ from .cells import (
     _inside,
     _line_point,
     _mix32,
+    _plume_roll,
+    _run_end,
     _scaled,
     _spawn_state,
     _temperature,
@@ -53,7 +55,7 @@ from .cells import (
     swap,
 )
 from .chunks import _unvisited
-from .heat import stirs
+from .heat import _cooling_loss, stirs
 from .jit import compiled, inlined
 from .layout import ALWAYS, BURNING, FLAMMABLE, IGNITES, LOOSE, SUBCELL
 
@@ -102,7 +104,8 @@ def _way_into(kind, threshold, o, o_kind, o_flags, o_energy, o_thermal, o_life, 
             return WAIT
         if threshold == ALWAYS or (level and fluid):
             return OPEN
-    return OPEN if (_cell_key(roll_key, x, y) >> 24) < threshold else WAIT
+    roll = _cell_key(roll_key, x, y) if o == 0 else _plume_roll(roll_key, x, y)  # a gas leaves its rest by a roll of its own
+    return OPEN if (roll >> 24) < threshold else WAIT
 
 
 @inlined
@@ -337,15 +340,69 @@ def knock(s, t, x, y, px, py, knock_key):
 
 
 @inlined
+def sink_run(s, t, x, y, g, run_key, ambient):
+    """The faller at (x, y) sinks into the fluid below it (rises into the one above, for g = -1),
+    and the fallers behind it in its run of rows (see :data:`~.layout.PLUME_RUN`) that could
+    sink into that fluid too follow it, a cell each: the fluid rises through them to the run's
+    end, in one turn of the column. So a body of sand sinks into water as a whole, the water
+    rising through it in channels, with no comb of alternating rows. The run stops at a cell
+    done this frame or with work of its own due; the followers are left at rest, as they were.
+    The lead's velocity and flags are the caller's to set. Returns the row the fluid ended at,
+    and whether the heat field changed (the fluid traded places with cells of another
+    temperature, or one of them cools: see :func:`~.heat.stirs`)."""
+    cells, flags, heat, shade, timer, vx, vy = s.cells, s.flags, s.heat, s.shade, s.timer, s.vx, s.vy
+    height = cells.shape[0]
+    ty = y + g
+    fluid = cells[_at(ty, x)]
+    end = min(max(_run_end(run_key, x, y, g), 0), height - 1)
+    fy = y  # where the fluid ends up
+    while fy != end:
+        ny = fy - g
+        c = cells[_at(ny, x)]
+        f = flags[_at(ny, x)]
+        if t.fall_dir[c] != g or t.displace[c, fluid] == 0 or (f & DONE) != 0:
+            break
+        if _restless(f, t.thermal[c], t.life_frames[c], heat[_at(ny, x)], t.cold_limit[c], t.hot_limit[c], t.ignite_limit[c]):
+            break
+        fy = ny
+    f_heat, f_cap, f_flags = int(heat[_at(ty, x)]), t.heat_cap[fluid], flags[_at(ty, x)]
+    f_shade, f_timer, f_vx, f_vy = shade[_at(ty, x)], timer[_at(ty, x)], vx[_at(ty, x)], vy[_at(ty, x)]
+    stir = _cooling_loss(f_heat, f_cap, t.cooling[fluid], ambient) != 0
+    r = ty
+    while r != fy:  # each faller from the lead back down (up) a cell, into row r
+        q = r - g
+        c = cells[_at(q, x)]
+        h = int(heat[_at(q, x)])
+        stir = stir or h * f_cap != f_heat * t.heat_cap[c] or _cooling_loss(h, t.heat_cap[c], t.cooling[c], ambient) != 0
+        cells[_at(r, x)] = c
+        heat[_at(r, x)] = h
+        shade[_at(r, x)] = shade[_at(q, x)]
+        timer[_at(r, x)] = timer[_at(q, x)]
+        if q != y:  # a follower: carried along at rest
+            vx[_at(r, x)] = 0
+            vy[_at(r, x)] = 0
+            flags[_at(r, x)] = MOVED | (flags[_at(q, x)] & CARRIED)
+        r = q
+    cells[_at(fy, x)] = fluid
+    heat[_at(fy, x)] = f_heat
+    shade[_at(fy, x)] = f_shade
+    timer[_at(fy, x)] = f_timer
+    vx[_at(fy, x)] = f_vx
+    vy[_at(fy, x)] = f_vy
+    flags[_at(fy, x)] = MOVED | (f_flags & CARRIED)
+    return fy, stir
+
+
+@inlined
 def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, forward, x0, y0, x1, y1, frame, ambient):
     """Phase 4: choose up to four moves by the archetype, walk them, settle the velocity, and swap.
-    Returns (busy, stir, born, px, py): as the other phases' (see :mod:`.fire`), and where the
-    mover ended up."""
+    Returns (busy, stir, born, px, py, ry): as the other phases' (see :mod:`.fire`), where the
+    mover ended up, and the farthest row a run that followed it reached (y where none did)."""
     cells, vx, vy, flags = s.cells, s.vx, s.vy, s.flags
     height, width = cells.shape
     kind = t.archetype[e]
     if kind == STATIC:
-        return False, False, np.int64(0), x, y
+        return False, False, np.int64(0), x, y, y
     old_vx = int(vx[_at(y, x)])
     old_vy = int(vy[_at(y, x)])
     g = t.fall_dir[e]
@@ -356,7 +413,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         # At rest, first a cheap test of its five moves' cells: holds none an element it may displace?
         # Then it stays put, as most of a body of liquid does.
         if (displaces & present) == 0 or (displaces & fluid_near(cells, x, y, g)) == 0:
-            return False, False, np.int64(0), x, y
+            return False, False, np.int64(0), x, y, y
     busy = False
     opens = False
     if kind != PARTICLE and _within(ty, height):
@@ -369,7 +426,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
             if way == WAIT:
                 busy = True
                 if kind == POWDER:
-                    return busy, False, np.int64(0), x, y  # a grain waits for its chance to sink (fluids flow aside meanwhile)
+                    return busy, False, np.int64(0), x, y, y  # a grain waits for its chance to sink (fluids flow aside meanwhile)
     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
     if fluid and not opens and (displaces & present) != 0:
         for k in range(1, 5):  # the cells fluid_near looks at, less the one below
@@ -378,7 +435,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
                 can_flow = True
                 break
         if not can_flow and old_vx == 0 and old_vy == 0:
-            return busy, False, np.int64(0), x, y  # at rest, every move shut (by cells done this frame)
+            return busy, False, np.int64(0), x, y, y  # at rest, every move shut (by cells done this frame)
     # Straight into a fluid below: one cell, where its speed is lost anyway; no rolls needed.
     straight = opens and old_vx == 0 and cells[_at(ty, x)] != 0
     h = 0 if straight else _cell_key(move_key, x, y)
@@ -393,7 +450,8 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         tries = 1 if d0x != 0 or d0y != 0 else 0
     elif opens:
         falling = True
-        loose = LOOSE
+        if not (straight and old_vy == 0):
+            loose = LOOSE  # a grain at rest sinks into a fluid at rest: it lands without sliding
         if straight:
             d0y = g
         else:
@@ -401,10 +459,10 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
             d1y = g  # if the drift is blocked: straight on, one cell
             tries = 2
     elif g > 0 and cvy > 0 and _within(ty, height) and vy[_at(ty, x)] > 0 and t.archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
-        return True, False, np.int64(0), x, y  # the cell below falls too and has not had its turn (another tile's): wait for it
+        return True, False, np.int64(0), x, y, y  # the cell below falls too and has not had its turn (another tile's): wait for it
     elif kind == POWDER:
         if loose == 0:
-            return busy, False, np.int64(0), x, y  # resting: stays put until the cell below opens or it is knocked
+            return busy, False, np.int64(0), x, y, y  # resting: stays put until the cell below opens or it is knocked
         tries, d0x, d0y, d1x, d2x, d2y, cvx, coasting = powder_moves(h, g, t.impact_share[e], t.max_speed[e], cvx, cvy)
         cvy = 0
     else:
@@ -428,12 +486,15 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         if kind == POWDER and (flags[_at(y, x)] & LOOSE) != loose:
             flags[_at(y, x)] ^= LOOSE
             busy = True
-        return busy or (kind == POWDER and loose != 0), False, np.int64(0), x, y  # a loose grain is still in motion
+        return busy or (kind == POWDER and loose != 0), False, np.int64(0), x, y, y  # a loose grain is still in motion
 
     stir = False
     born = np.int64(0)
     marks = flags[_at(y, x)] & (CARRIED & ~LOOSE)  # what travels with the mover besides LOOSE
-    if px != x or py != y:
+    ry = y
+    if entered != 0 and px == x and py == ty:  # sank straight into a fluid: the run behind it follows
+        ry, stir = sink_run(s, t, x, y, g, exchange_key, ambient)
+    elif px != x or py != y:
         # Heat stays even where two cells of one temperature trade places and neither cools.
         stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(py, px)]), t.heat_cap[entered], t.cooling[entered], ambient)
         swap(s, x, y, px, py, kind == PARTICLE)
@@ -444,6 +505,6 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         if loose != 0:  # landed
             born = land(s, t, px, py, e, spawn_key)
             stir = True
-    else:
+    elif entered == 0:  # sinking through a fluid knocks nothing loose
         knock(s, t, x, y, px, py, knock_key)
-    return True, stir, born, px, py
+    return True, stir, born, px, py, ry

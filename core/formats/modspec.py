@@ -138,18 +138,37 @@ class Lifetime(_Strict):
 Temperature = Annotated[float, Field(ge=MIN_TEMPERATURE, le=MAX_TEMPERATURE)]
 
 
+_LATENT = (
+    "Heat the change takes from the cell (gives it, when cooled), in degrees times heat capacity: with it the "
+    "change keeps the cell's heat, less (plus) this, and the new element's temperature follows from its own heat "
+    "capacity; without it the change keeps the temperature. Water boiling into steam takes it, steam condensing "
+    "gives it back, so neither flickers at the boiling point."
+)
+_SPREAD = (
+    "Degrees past the point over which the change grows likely: a cell past the point changes each frame by a "
+    "chance that grows with how far past it is, up to one half at the spread's end, rolled for small blocks of "
+    "cells together, so that a layer heated evenly boils in bubbles, not as one sheet. 0: at once."
+)
+
+
 class Heated(_Strict):
-    """Hotter than ``above`` degrees, the element turns into another, keeping its temperature."""
+    """Hotter than ``above`` degrees, the element turns into another, keeping its temperature (or, with a
+    ``latent_heat``, its heat less that)."""
 
     above: Temperature = Field(description="Degrees Celsius; hotter than this, it changes.")
     becomes: ElementName = Field(description="The element it turns into (water: 'steam').")
+    latent_heat: float | None = Field(None, ge=0.0, le=1e6, description=_LATENT)
+    spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD)
 
 
 class Cooled(_Strict):
-    """Colder than ``below`` degrees, the element turns into another, keeping its temperature."""
+    """Colder than ``below`` degrees, the element turns into another, keeping its temperature (or, with a
+    ``latent_heat``, its heat plus that)."""
 
     below: Temperature = Field(description="Degrees Celsius; colder than this, it changes.")
     becomes: ElementName = Field(description="The element it turns into (lava: 'stone').")
+    latent_heat: float | None = Field(None, ge=0.0, le=1e6, description=_LATENT)
+    spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD)
 
 
 class Flammable(_Strict):

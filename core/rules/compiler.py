@@ -83,10 +83,14 @@ class Tables(NamedTuple):
     cooling: np.ndarray  # int64[n]: share of the gap to the air's temperature lost per frame, of 256
     temp_start: np.ndarray  # int32[n]: temperature of a new cell, TEMP_ONE units
     thermal: np.ndarray  # uint8[n]: HEATED | COOLED | FLAMMABLE | IGNITES | EXPLOSIVE
-    hot_limit: np.ndarray  # int64[n]: energy above which it becomes heated_into
+    hot_limit: np.ndarray  # int64[n]: energy above which it may become heated_into (past hot_limit + its share of hot_spread)
     heated_into: np.ndarray  # uint16[n]
-    cold_limit: np.ndarray  # int64[n]: energy below which it becomes cooled_into
+    hot_spread: np.ndarray  # int64[n]: energy over which cells change, each past its own share (shade / 256)
+    hot_latent: np.ndarray  # int64[n]: energy the change takes; -1: it keeps the temperature instead
+    cold_limit: np.ndarray  # int64[n]: energy below which it may become cooled_into (past cold_limit - its share of cold_spread)
     cooled_into: np.ndarray  # uint16[n]
+    cold_spread: np.ndarray  # int64[n]
+    cold_latent: np.ndarray  # int64[n]: energy the change gives; -1: it keeps the temperature instead
     # Fire.
     ignite_limit: np.ndarray  # int64[n]: energy at or above which a flammable cell catches fire
     catch_chance: np.ndarray  # uint32[n]: roll threshold to catch from a touching flame
@@ -285,6 +289,12 @@ def temperature_units(celsius: float) -> int:
     return round(celsius * TEMP_ONE)
 
 
+def _phase_heat(change, cap: int) -> tuple[int, int]:
+    """A phase change's spread and latent heat, in the kernel's energy units (-1: no latent heat)."""
+    latent = -1 if change.latent_heat is None else round(change.latent_heat * TEMP_ONE * CAP_ONE)
+    return cap * temperature_units(change.spread), latent
+
+
 def _fill_heat(t: Tables, info: ElementInfo, resolve) -> None:
     """Heat, phase changes, fire and explosions of one element; ``resolve(ref, *field)`` names others."""
     spec, i = info.spec, info.index
@@ -298,10 +308,12 @@ def _fill_heat(t: Tables, info: ElementInfo, resolve) -> None:
         t.thermal[i] |= HEATED
         t.hot_limit[i] = cap * temperature_units(spec.heated.above)
         t.heated_into[i] = into
+        t.hot_spread[i], t.hot_latent[i] = _phase_heat(spec.heated, cap)
     if spec.cooled is not None and (into := resolve(spec.cooled.becomes, "cooled", "becomes")) is not None:
         t.thermal[i] |= COOLED
         t.cold_limit[i] = cap * temperature_units(spec.cooled.below)
         t.cooled_into[i] = into
+        t.cold_spread[i], t.cold_latent[i] = _phase_heat(spec.cooled, cap)
     if spec.ignites:
         t.thermal[i] |= IGNITES
     t.extinguishes[i] = spec.extinguishes
@@ -364,21 +376,32 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
                 if b != a:
                     t.displace[a, b] = exchange_chance(densities[a], densities[b], int(t.fall_dir[a]))
             gas = t.archetype[a] == ARCHETYPE_CODES["gas"]
-            t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a])) if gas else ALWAYS
+            t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a]), INTO_AIR) if gas else ALWAYS
     t.displaces[:] = element_masks(t.displace)
 
 
-def exchange_chance(mover: float, other: float, fall_dir: int) -> int:
-    """The chance (of ALWAYS) that a mover of density ``mover`` falling (+1) or rising (-1)
-    trades places with a fluid of density ``other`` in a frame: 1.5 times the gap's share of
-    the larger density, at most sure (a gap of two thirds or more), at least 1; 0 where it cannot.
+#: Fluids trade places by a chance EAGERNESS times their densities' gap's share of the larger...
+EAGERNESS = 2.5
+#: ...at most SURE_ENOUGH (of ALWAYS, 0.94): never sure, so that blocks of cells that sink
+#: together now and then wait a frame, and no comb of alternating rows forms.
+SURE_ENOUGH = 240
+#: A gas at rest starts to rise (sink) through the air by a chance INTO_AIR times the gap's share,
+#: each cell by a roll of its own: a cloud rises raggedly, not row by row.
+INTO_AIR = (1.5, ALWAYS)
 
-    Sand (1600) into water (1000): 0.56; water into oil (850): 0.23; steam (0.6) through the
-    air (1.2): 0.75. Never sure for neighbours close in density, so fluids trade places here
-    and there, as plumes and drops, not whole rows at once.
+
+def exchange_chance(mover: float, other: float, fall_dir: int, eagerness: tuple[float, int] = (EAGERNESS, SURE_ENOUGH)) -> int:
+    """The chance (of ALWAYS) that a mover of density ``mover`` falling (+1) or rising (-1)
+    trades places with a fluid of density ``other`` in a frame, rolled once per plume block
+    (see :data:`sandmod.engine.layout.PLUME`): ``eagerness`` (a factor and a most) times the
+    gap's share of the larger density, at least 1; 0 where it cannot.
+
+    Sand (1600) into water (1000): 0.94; water into oil (850): 0.38; steam (0.6) through the
+    air (1.2), with INTO_AIR: 0.75.
     """
     gap = (mover - other) * fall_dir
-    return max(1, min(ALWAYS, int(round(1.5 * ALWAYS * gap / max(mover, other))))) if gap > 0 else 0
+    factor, most = eagerness
+    return max(1, min(most, int(round(factor * ALWAYS * gap / max(mover, other))))) if gap > 0 else 0
 
 
 @dataclass
@@ -478,8 +501,12 @@ def _empty_tables(n: int) -> Tables:
         thermal=np.zeros(n, np.uint8),
         hot_limit=np.full(n, _NO_LIMIT, np.int64),
         heated_into=np.zeros(n, np.uint16),
+        hot_spread=np.zeros(n, np.int64),
+        hot_latent=np.full(n, -1, np.int64),
         cold_limit=np.full(n, -_NO_LIMIT, np.int64),
         cooled_into=np.zeros(n, np.uint16),
+        cold_spread=np.zeros(n, np.int64),
+        cold_latent=np.full(n, -1, np.int64),
         ignite_limit=np.full(n, _NO_LIMIT, np.int64),
         catch_chance=np.zeros(n, np.uint32),
         burn_frames=np.zeros(n, np.uint16),

@@ -28,12 +28,14 @@ def test_the_python_run_reaches_the_compiled_kernels_frames_and_counts_each_call
     assert output[0] == "halves 64x64, frame 1, the kernel run as Python:"
     assert output[-1] == "  the same frames as the compiled kernel"
     fast = calls_of(output, "with the fast loop")
-    # The bottom row of sand sinks into the water, each grain by its chance (0.56): the fast loop
-    # moves the 33 of the 62 inner grains whose chance came up, and hands on the two at the world's
-    # edges to the full update, whose moves swap them and knock their neighbours.
-    assert fast["swap"] == 33 + 2 and fast["knock"] == 2
-    # The freshly painted grains are loose: the full update settles each (every one calm: ready for its move).
-    assert fast["_update_cell"] == fast["move"] == fast["settle"] > 64 * 30 and "heat_and_fire" not in fast
+    # The bottom row of sand sinks into the water, each plume block of grains by its chance (0.94):
+    # each of the 64 grains rolls once (the fast loop hands on the two at the world's edges to the
+    # full update), 60 of them in blocks whose chance came up sink, with the grains above them in
+    # their runs, and sinking knocks nothing loose.
+    assert fast["_plume_roll"] == 64 and fast["sink_run"] == 60 and "knock" not in fast
+    # The freshly painted grains are loose: the full update settles each that did not sink with a
+    # run (every one calm: ready for its move).
+    assert fast["_update_cell"] == fast["move"] == fast["settle"] > 64 * 20 and "heat_and_fire" not in fast
     assert fast["step_region"] == 1
 
 
