@@ -43,7 +43,7 @@ from .fire import heat_and_fire
 from .heat import conduct
 from .jit import compiled, in_place, inlined, numba, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
-from .moves import fluid_near, move, sink_run
+from .moves import fluid_near, knock, move, sink_run
 from .paint import paint_cells  # noqa: F401
 from .prefetch import prefetch
 from .reactions import lifetime, react
@@ -89,7 +89,7 @@ def _box_with(box, x0, x1, y0, y1):
 
 
 @inlined
-def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, ambient, y1, busy_box, stir_box):
+def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key, ambient, y1, busy_box, stir_box):
     """The fast loop: the cells of row y's segment sx0..sx1-1 from its ``n``-th on (in the row's
     direction) that need little, in a loop that holds few values (registers, not the stack): cells
     at rest that nothing around them can move (a resting fluid that nothing it could displace is
@@ -146,11 +146,13 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, ambient, y
             busy_box = _box_with(busy_box, x, x, y, y)  # it waits for its chance to sink
             n += 1
             continue
-        # Straight into a fluid: one cell, its speed lost (sinking knocks nothing loose).
+        # Straight into a fluid: one cell, its speed lost, with the run behind it.
         ry, stir = sink_run(s, t, x, y, ty - y, exchange_key, ambient)  # the grains above it follow
         vx[_at(ty, x)] = 0
         vy[_at(ty, x)] = 0
-        flags[_at(ty, x)] = MOVED | (f & CARRIED)  # at rest it sinks at rest: it lands without sliding
+        flags[_at(ty, x)] = MOVED | LOOSE | (f & CARRIED)  # sinking: it may slide where it lands
+        if ry == y:  # nothing followed it: the grains diagonally above may, if knocked loose
+            knock(s, t, x, y, x, ty, knock_key, 2, 4)
         busy_box = _box_with(busy_box, x, x, ry, ty)
         if stir:
             stir_box = _box_with(stir_box, x, x, ry, ty)
@@ -250,7 +252,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             n = 0
             while n < count:
                 if fast:
-                    n, x, e, ready, busy_box, stir_box = _fast_cells(s, t, y, sx0, sx1, n, forward, present, keys[4], ambient, y1, busy_box, stir_box)
+                    n, x, e, ready, busy_box, stir_box = _fast_cells(s, t, y, sx0, sx1, n, forward, present, keys[4], keys[5], ambient, y1, busy_box, stir_box)
                     if n == count:
                         break
                     handed_on += 1

@@ -301,9 +301,13 @@ def land(s, t, x, y, e, spawn_key):
 
 
 @inlined
-def knock(s, t, x, y, px, py, knock_key):
+def knock(s, t, x, y, px, py, knock_key, first, last):
     """A move from (x, y) to (px, py) knocks resting grains loose, each by its chance: those that
-    could follow into the vacated cell (pushed towards it) and those beside the arrival (pushed away)."""
+    could follow into the vacated cell (pushed towards it) and those beside the arrival (pushed
+    away); of these six (beside the vacated cell, diagonally above it, beside the arrival) the
+    ``first`` to the ``last`` - 1. A grain that sinks into a fluid with nothing following it
+    knocks only the two diagonally above the cell it left (the fluid damps the rest): so a heap
+    under water slumps."""
     cells, flags = s.cells, s.flags
     height, width = cells.shape
     if (
@@ -319,7 +323,7 @@ def knock(s, t, x, y, px, py, knock_key):
         != 0
     ):
         return  # all six are in motion already (the common case)
-    for k in range(6):
+    for k in range(first, last):
         if k < 4:
             nx = x + (-1, 1, -1, 1)[k]
             ny = y - (0, 0, 1, 1)[k]
@@ -450,8 +454,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         tries = 1 if d0x != 0 or d0y != 0 else 0
     elif opens:
         falling = True
-        if not (straight and old_vy == 0):
-            loose = LOOSE  # a grain at rest sinks into a fluid at rest: it lands without sliding
+        loose = LOOSE
         if straight:
             d0y = g
         else:
@@ -505,6 +508,8 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         if loose != 0:  # landed
             born = land(s, t, px, py, e, spawn_key)
             stir = True
-    elif entered == 0:  # sinking through a fluid knocks nothing loose
-        knock(s, t, x, y, px, py, knock_key)
+    elif entered == 0:
+        knock(s, t, x, y, px, py, knock_key, 0, 6)
+    elif ry == y:  # sank, and no run followed it into the cell it left
+        knock(s, t, x, y, px, py, knock_key, 2, 4)
     return True, stir, born, px, py, ry
