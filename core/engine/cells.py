@@ -23,7 +23,6 @@ DONE = MOVED | REACTED  # flag bits of a cell no other may move this frame
 KEPT = LOOSE | BURNING | SCORCHED  # flag bits that travel with a cell from frame to frame
 CARRIED = KEPT | REACTED  # and those it takes along when it moves (REACTED until the frame ends)
 FRESH = ~(BURNING | SCORCHED)  # a cell turning into another element keeps only these flag bits
-SALT_RUN = 0x5BD1E995
 T_LOW = int(MIN_TEMPERATURE * TEMP_ONE)
 T_HIGH = int(MAX_TEMPERATURE * TEMP_ONE)
 
@@ -77,7 +76,7 @@ def _plume_roll(key, x, y):
 def _run_end(key, x, y, g):
     """The last row, going against ``g`` (up, for a faller), of the run of PLUME_RUN rows that row
     y of column x is in this frame (each column's runs shifted by a hash of its own)."""
-    shift = _mix32(key ^ SALT_RUN ^ x) & (PLUME_RUN - 1)
+    shift = _mix32(key ^ hashing.SALT_RUN ^ x) & (PLUME_RUN - 1)
     first = (((y + shift) >> PLUME_RUN_SHIFT) << PLUME_RUN_SHIFT) - shift
     return first if g > 0 else first + PLUME_RUN - 1
 
