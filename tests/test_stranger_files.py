@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import signal
 import subprocess
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -229,6 +231,22 @@ def test_bad_snapshots_are_clean_problems(snapshot):
     _save("heat.npz", {**snapshot, "heat": np.zeros(2**22, np.int32)})
     np.save("lone.npy", np.zeros(3))
     for name in ("empty.npz", "corrupt.npz", "frame.npz", "huge_frame.npz", "negative.npz", "awake.npz", "heat.npz", "lone.npy"):
+        refused(invoke("render", "w.toml", "--frames", "2", "-o", "out.gif", "--from-snapshot", name), f"{name}: ")
+    assert not Path("out.gif").exists()
+
+
+def test_a_snapshot_member_claiming_a_huge_shape_or_a_deep_description_is_a_clean_problem(snapshot):
+    # A .npy header may claim 2**40 cells in a member of a few bytes: refused before numpy allocates it.
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(header, {"descr": "<u2", "fortran_order": False, "shape": (2**20, 2**20)})
+    with zipfile.ZipFile("claims.npz", "w") as archive:
+        for key, array in snapshot.items():
+            buffer = io.BytesIO()
+            np.lib.format.write_array(buffer, array, allow_pickle=False)
+            archive.writestr(f"{key}.npy", header.getvalue() if key == "cells" else buffer.getvalue())
+    deep = np.array("[" * 2000 + "]" * 2000)  # json.loads would recurse 2,000 deep
+    np.savez_compressed("deep.npz", **{**snapshot, "meta": deep})
+    for name in ("claims.npz", "deep.npz"):
         refused(invoke("render", "w.toml", "--frames", "2", "-o", "out.gif", "--from-snapshot", name), f"{name}: ")
     assert not Path("out.gif").exists()
 

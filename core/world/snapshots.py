@@ -149,7 +149,7 @@ def _read(path: Path, expected: dict[str, np.ndarray]) -> tuple[_Meta, dict[str,
                 for key, limit in limits.items():
                     if key not in sizes:
                         continue
-                    if sizes[key] > limit + _NPY_HEADER:
+                    if sizes[key] > limit + _NPY_HEADER or _claimed_bytes(data.zip, key) > limit:
                         raise _NotASnapshot(f"its '{key}' member is larger than a {key} can be")
                     arrays[key] = data[key]
                     if not isinstance(arrays[key], np.ndarray):  # a member that is not an .npy array
@@ -162,11 +162,23 @@ def _read(path: Path, expected: dict[str, np.ndarray]) -> tuple[_Meta, dict[str,
         meta = _Meta.model_validate(json.loads(str(arrays.pop("meta"))))
     except KeyError:
         raise _NotASnapshot() from None
+    except RecursionError:
+        raise _NotASnapshot("its description nests too deep") from None
     except (ValueError, ValidationError) as exc:  # ValueError: bad JSON
         raise _NotASnapshot(f"its description is wrong: {_first_error(exc)}") from None
     if meta.format == FORMAT and len(meta.elements) < 1:
         raise _NotASnapshot("its description lists no elements")
     return meta, arrays
+
+
+def _claimed_bytes(archive: zipfile.ZipFile, key: str) -> int:
+    """The bytes the .npy header of member ``key`` says its array holds, read before the array is:
+    a small member may claim a huge shape, which numpy would allocate before reading a byte of it."""
+    with archive.open(f"{key}.npy") as member:
+        version = np.lib.format.read_magic(member)
+        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, _, dtype = read_header(member)
+    return int(np.prod(shape, dtype=object)) * dtype.itemsize
 
 
 def _first_error(exc: Exception) -> str:
