@@ -6,6 +6,7 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -23,16 +24,27 @@ SCALE = 2
 @pytest.fixture(autouse=True)
 def _headless(tmp_path, monkeypatch):
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    monkeypatch.setenv("XDG_CACHE_HOME", os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache"))  # the kernel's
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))  # where play writes when no other folder will do
     monkeypatch.chdir(tmp_path)
+    opened = Play.__init__
+
+    def remembered(self, *args, **kwargs):
+        opened(self, *args, **kwargs)
+        Play.last = self
+
+    monkeypatch.setattr(Play, "__init__", remembered)
 
 
 def post(kind, **fields) -> None:
     pygame.event.post(pygame.event.Event(kind, **fields))
 
 
-def at(x: int, y: int) -> tuple[int, int]:
-    """The window position of cell (x, y)."""
-    return x * SCALE + 1, y * SCALE + 1
+def at(x: int, y: int, play: Play | None = None) -> tuple[int, int]:
+    """The window position of cell (x, y) (in the last window opened, unless ``play`` is given)."""
+    view = (play or Play.last).view
+    left, top = view.origin()
+    return left + (x - view.corner[0]) * view.scale + 1, top + (y - view.corner[1]) * view.scale + 1
 
 
 def frames(play: Play, count: int) -> None:
@@ -60,7 +72,7 @@ def test_a_scripted_session_replays_from_the_world_file_it_saves():
     post(pygame.MOUSEBUTTONUP, pos=at(40, 5), button=1)
     frames(play, 5)
     key(play, pygame.K_z, pygame.KMOD_CTRL)
-    assert play.message == "undone" and play.session.world.frame == 12  # back to 11, then that frame's step
+    assert play.message == "undid a paint" and play.session.world.frame == 12  # back to 11, then that frame's step
     ys, xs = (play.session.world.cells == sand).nonzero()
     post(pygame.MOUSEBUTTONDOWN, pos=at(int(xs[-1]), int(ys[-1])), button=2)  # pick a grain of sand
     frames(play, 1)
@@ -83,7 +95,8 @@ def test_a_scripted_session_replays_from_the_world_file_it_saves():
     assert state_digest(replay.world) == state_digest(play.session.world)
     key(play, pygame.K_p)
     key(play, pygame.K_g)
-    assert Path("play-screenshot.png").stat().st_size > 0 and Path("play-capture.gif").stat().st_size > 0
+    assert play.capture_job.result(wait=True).startswith("saved")
+    assert Path("play-screenshot.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and Path("play-capture.gif").read_bytes()[:6] == b"GIF89a"
 
 
 def test_saving_a_mod_reloads_it_and_a_broken_one_is_shown_while_the_old_rules_go_on():
@@ -121,14 +134,15 @@ def test_a_bad_world_is_one_line_per_problem_and_exit_2_before_any_window():
 
 def test_a_world_larger_than_the_window_is_seen_through_a_view_that_pans_and_zooms():
     play = Play(Session.open(None, size=(800, 500)), scale=2, fixed_steps=1)
-    assert play.area == (1280, 800) and play._shown() == (640, 400)
+    view = play.view
+    assert view.area == (1280, 800) and view.shown() == (640, 400)
     key(play, pygame.K_RIGHT)
     key(play, pygame.K_DOWN)
-    assert play.view == [160, 100] and play._cell(at(0, 0)) == (160, 100)
+    assert view.corner == [160, 100] and view.cell_at((1, 1)) == (160, 100)
     key(play, pygame.K_RIGHT)
-    assert play.view == [160, 100]  # at the world's edge
-    play._zoom(2, (0, 0))
-    assert play.scale == 4 and play._shown() == (320, 200) and play._cell((0, 0)) == (160, 100)
+    assert view.corner == [160, 100]  # at the world's edge
+    view.zoom(2, (0, 0))
+    assert view.scale == 4 and view.shown() == (320, 200) and view.cell_at((0, 0)) == (160, 100)
     post(pygame.MOUSEBUTTONDOWN, pos=(8, 8), button=1)  # paints where the view shows, not at the corner
     post(pygame.MOUSEBUTTONUP, pos=(8, 8), button=1)
     frames(play, 1)
@@ -153,3 +167,213 @@ def test_a_square_brush_paints_a_square():
     frames(play, 1)
     stone = play.session.world.cells == play.brush.element
     assert stone.sum() == 25 and stone[8:13, 8:13].all()
+
+
+# --- the screen is the world -------------------------------------------------------------------
+
+def wrong_cells(play: Play) -> int:
+    """Cells whose colour on the screen is not the world's (``world.image()`` through the palette)."""
+    view, world = play.view, play.session.world
+    screen = pygame.surfarray.array3d(view.screen).transpose(1, 0, 2)
+    left, top = view.origin()
+    columns, rows = view.shown()
+    shown = screen[top : top + rows * view.scale : view.scale, left : left + columns * view.scale : view.scale]
+    x0, y0 = view.corner
+    if view.heat_view:
+        truth = world.heat_image()[y0 : y0 + rows, x0 : x0 + columns]
+    else:
+        truth = view.palette[world.image()][y0 : y0 + rows, x0 : x0 + columns]
+    return int((shown != truth).any(axis=2).sum())
+
+
+def away(play: Play) -> None:
+    """The mouse over the status line: no brush outline over the world, no tooltip."""
+    pygame.mouse.set_pos((play.view.size[0] - 5, play.view.size[1] - 5))
+
+
+def drag(play: Play, cells, button: int = 1) -> None:
+    post(pygame.MOUSEBUTTONDOWN, pos=at(*cells[0]), button=button)
+    for cell in cells[1:]:
+        post(pygame.MOUSEMOTION, pos=at(*cell), rel=(0, 0), buttons=(1, 0, 0))
+    post(pygame.MOUSEBUTTONUP, pos=at(*cells[-1]), button=button)
+    frames(play, 1)
+
+
+def test_after_every_kind_of_action_the_screen_shows_the_world_cell_for_cell():
+    Path("mods").mkdir()
+    mod = Path("mods/goo.toml")
+    mod.write_text('[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n')
+    play = Play(Session.open(None, size=(96, 64)), scale=SCALE, fixed_steps=2)
+    play.next_mod_check = float("inf")
+    ruleset = play.session.world.ruleset
+    away(play)
+    drag(play, [(5, 30), (60, 30)])  # sand, falling
+    frames(play, 120)  # everything asleep
+    assert play.session.world.awake_fraction == 0 and wrong_cells(play) == 0
+    play.brush.element = ruleset.index("stone")  # into the quiet world: it stays where it is painted
+    drag(play, [(70, 10), (90, 12)])
+    away(play)
+    frames(play, 3)
+    assert wrong_cells(play) == 0 and (play.session.world.cells == play.brush.element).sum() > 20
+    checks = {
+        "erase": lambda: drag(play, [(20, 60), (30, 60)], button=3),
+        "undo": lambda: key(play, pygame.K_z, pygame.KMOD_CTRL),
+        "explode": lambda: (pygame.mouse.set_pos(at(40, 55)), key(play, pygame.K_x)),
+        "spray": lambda: (pygame.mouse.set_pos(at(40, 20)), key(play, pygame.K_q), frames(play, 5), post(pygame.KEYUP, key=pygame.K_q, mod=0)),
+        "undo again": lambda: key(play, pygame.K_z, pygame.KMOD_CTRL),
+        "snapshot": lambda: key(play, pygame.K_F5),
+        "paint": lambda: drag(play, [(10, 5), (50, 5)]),
+        "load": lambda: key(play, pygame.K_F9),
+        "clear": lambda: key(play, pygame.K_DELETE),
+        "undo the clear": lambda: key(play, pygame.K_z, pygame.KMOD_CTRL),
+        "heat view": lambda: key(play, pygame.K_v),
+        "heat": lambda: (key(play, pygame.K_h), drag(play, [(10, 50), (30, 50)])),
+        "cell view": lambda: key(play, pygame.K_v),
+    }
+    for action, do in checks.items():
+        do()
+        away(play)
+        frames(play, 4)
+        assert wrong_cells(play) == 0, action
+    key(play, pygame.K_DELETE)  # water, goo floating on it, settled; then goo is made heavier than water
+    play.brush.tool, play.brush.size = "paint", 9
+    play.brush.element = ruleset.index("water")
+    drag(play, [(2, 50), (93, 50)])
+    frames(play, 60)
+    play.brush.element, play.brush.size = ruleset.index("goo"), 3
+    drag(play, [(2, 30), (93, 30)])
+    away(play)
+    frames(play, 200)
+    mod.write_text(mod.read_text().replace("#00ff00", "#ff00ff").replace("density = 900", "density = 2500"))
+    play.reload()
+    assert play.message == "mods reloaded"
+    frames(play, 1)
+    assert wrong_cells(play) == 0, "reload"
+    goo = play.session.world.ruleset.index("goo")
+    low = lambda: float(np.nonzero(play.session.world.cells == goo)[0].mean())
+    before = low()
+    frames(play, 40)
+    assert low() > before + 3, "settled goo feels its new density"
+    assert wrong_cells(play) == 0
+
+
+def test_writing_where_it_cannot_is_a_message_and_play_goes_on(tmp_path):
+    unwritable = Path("/proc")  # even for root, as tests in containers often are
+    if not unwritable.is_dir():
+        pytest.skip("needs /proc")
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1, session_path=unwritable / "w-session.toml")
+    drag(play, [(5, 5), (20, 5)])
+    for name in (pygame.K_s, pygame.K_p, pygame.K_F5, pygame.K_g):
+        key(play, name)
+    play.capture_job.result(wait=True)
+    assert play.saved_to == tmp_path / "w-session.toml"  # the current folder, the first being read-only
+    assert {"w-session.toml", "play-screenshot.png", "play-snapshot.npz", "play-capture.gif"} <= {p.name for p in tmp_path.iterdir()}
+    Path(tmp_path).chmod(0o555)
+    try:
+        key(play, pygame.K_s)  # the home folder, the current one being read-only too (unless we are root)
+        assert play.running
+    finally:
+        Path(tmp_path).chmod(0o755)
+
+
+def test_escape_with_unsaved_strokes_asks_and_the_close_button_saves():
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    drag(play, [(5, 5), (20, 5)])
+    key(play, pygame.K_ESCAPE)
+    assert play.running and "not saved" in play.prompt
+    key(play, pygame.K_a)  # any other key: stay
+    assert play.running and not play.prompt
+    key(play, pygame.K_ESCAPE)
+    key(play, pygame.K_s)  # s: save, and quit
+    assert not play.running and Path("play-session.toml").is_file()
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    drag(play, [(5, 5), (20, 5)])
+    post(pygame.QUIT)
+    frames(play, 1)
+    assert not play.running and "paint" in Path("play-session.toml").read_text()
+
+
+def test_a_reload_that_cannot_apply_is_shown_and_the_old_rules_go_on():
+    Path("mods").mkdir()
+    mod = Path("mods/goo.toml")
+    mod.write_text('[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n')
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    play.next_mod_check = float("inf")
+    play.brush.element = play.session.world.ruleset.index("goo")
+    drag(play, [(5, 5), (20, 5)])
+    frames(play, 2)
+    mod.write_text(mod.read_text().replace("[elements.goo]", "[elements.slime]"))  # renamed, while the world holds goo
+    play.reload()
+    assert play.problems and play.session.world.ruleset.index("goo:goo") and play.running
+    frames(play, 3)
+    assert play.session.world.frame == 6 and (play.session.world.cells == play.brush.element).any()
+
+
+def test_loading_a_snapshot_drops_the_strokes_after_it():
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    key(play, pygame.K_F5)
+    drag(play, [(5, 5), (20, 5)])
+    frames(play, 5)
+    key(play, pygame.K_F9)
+    assert play.session.events == [] and not play.session.world.cells.any()
+    frames(play, 10)
+    assert not play.session.world.cells.any()
+    play.do_save()
+    assert "does not replay bit for bit (a snapshot was loaded at frame 0)" in play.message
+
+
+def test_each_tool_is_an_undo_step_of_its_own():
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    drag(play, [(5, 40), (50, 40)])
+    pygame.mouse.set_pos(at(30, 20))
+    key(play, pygame.K_q)
+    frames(play, 4)
+    post(pygame.KEYUP, key=pygame.K_q, mod=0)
+    frames(play, 1)
+    sprays = [e for e in play.session.events if "spawn" in e]
+    assert len(sprays) == 5  # one a step while held
+    key(play, pygame.K_x)
+    key(play, pygame.K_DELETE)
+    labels = []
+    for _ in range(4):
+        key(play, pygame.K_z, pygame.KMOD_CTRL)
+        labels.append(play.message)
+    assert labels == ["undid a clear", "undid a blast", "undid a spray", "undid a paint"]
+    assert play.session.events == [] and play.session.world.frame == 1
+
+
+def test_the_bar_names_its_elements_and_search_prefers_the_exact_name():
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    ruleset = play.session.world.ruleset
+    assert ruleset.elements[play.brush.element].id == "sand:sand"
+    archetypes = [ruleset.elements[e].spec.archetype for e in play.bar]
+    assert archetypes == sorted(archetypes, key=["static", "powder", "liquid", "gas"].index)
+    for typed, wanted in (("water", "water:water"), ("fire", "fire:fire"), ("sto", "base:stone")):
+        key(play, pygame.K_SLASH)
+        for letter in typed:
+            post(pygame.KEYDOWN, key=ord(letter), mod=0, unicode=letter)
+        key(play, pygame.K_RETURN)
+        assert ruleset.elements[play.brush.element].id == wanted, typed
+    left, width, element = play.view.bar_slots(play.bar)[3]
+    pygame.mouse.set_pos((left + width // 2, play.view.area[1] + 10))
+    frames(play, 1)
+    name = ruleset.elements[element].name
+    assert play.view.bar_element_at((left + 1, play.view.area[1] + 5), play.bar) == element
+    key(play, pygame.K_F1)
+    assert play.help
+    frames(play, 1)
+    pygame.image.save(play.view.screen, "help.png")
+
+
+def test_consecutive_moves_of_one_stroke_on_a_frame_are_one_event():
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    key(play, pygame.K_SPACE)  # paused: every move is on one frame
+    drag(play, [(5, 5), (10, 6), (15, 8), (20, 8), (30, 9)])
+    assert len(play.session.events) == 1 and len(play.session.events[0]["paint"]["points"]) == 5
+    key(play, pygame.K_SPACE)
+    frames(play, 3)
+    play.do_save()
+    replay = load_world("play-session.toml")
+    for _ in range(replay.spec.render.frames):
+        replay.world.step()
+    assert state_digest(replay.world) == state_digest(play.session.world)

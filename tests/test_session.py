@@ -9,7 +9,9 @@ import pytest
 
 from sandmod.errors import ProblemsError
 from sandmod.jobs.benchmark import state_digest
-from sandmod.jobs.session import Session
+from sandmod.jobs import session as session_module
+from sandmod.jobs.session import Session, SessionFull
+from sandmod.jobs.undo import History
 from sandmod.world.loading import load_world
 
 WORLD = """
@@ -45,7 +47,7 @@ def _in_tmp(tmp_path, monkeypatch):
 
 def played(session: Session) -> None:
     """Strokes, an erase, heat, a spray and a blast, some while paused (two events on one frame)."""
-    session.begin_stroke()
+    session.checkpoint("paint")
     session.add("paint", {"shape": "stroke", "points": [[10, 10], [30, 12]], "thickness": 3, "element": "sand"})
     for _ in range(5):
         session.step()
@@ -53,7 +55,7 @@ def played(session: Session) -> None:
     session.add("paint", {"shape": "rect", "x": 5, "y": 30, "width": 20, "height": 6, "element": "water", "over": "empty"})
     for _ in range(10):
         session.step()
-    session.begin_stroke()
+    session.checkpoint("paint")
     session.add("erase", {"shape": "stroke", "points": [[20, 40], [25, 43]], "thickness": 4})
     session.add("heat", {"shape": "rect", "x": 0, "y": 40, "width": 10, "height": 4, "temperature": 800.0})
     session.add("spawn", {"element": "sand", "at": [32, 5], "radius": 2, "count": 10, "direction": 90, "spread": 90, "speed": [1, 2]})
@@ -77,7 +79,7 @@ def test_the_saved_world_file_replays_the_session_bit_for_bit(tmp_path):
 
 def test_a_session_without_a_world_file_replays_too(tmp_path):
     session = Session.open(None, size=(48, 40))
-    session.begin_stroke()
+    session.checkpoint("paint")
     session.add("paint", {"shape": "stroke", "points": [[5, 5], [40, 5]], "thickness": 5, "element": "sand"})
     for _ in range(30):
         session.step()
@@ -95,12 +97,12 @@ def test_undo_goes_back_to_before_the_last_stroke_and_forgets_it(tmp_path):
     for _ in range(5):
         session.step()
     before = state_digest(session.world)
-    session.begin_stroke()
+    session.checkpoint("paint")
     session.add("paint", {"shape": "circle", "x": 20, "y": 20, "radius": 6, "element": "sand"})
     for _ in range(8):
         session.step()
-    assert session.undo() and session.world.frame == 5 and state_digest(session.world) == before
-    assert session.events == [] and not session.undo()
+    assert session.undo() == "paint" and session.world.frame == 5 and state_digest(session.world) == before
+    assert session.events == [] and session.undo() is None
     for _ in range(8):  # and the world goes on as if the stroke never was
         session.step()
     fresh = load_world("w.toml").world
@@ -135,3 +137,37 @@ def test_a_mod_saved_while_playing_is_reloaded_keeping_every_cell(tmp_path):
     problems = session.reload_mods()
     assert problems and "goo.toml" in problems[0] and "density" in problems[0]
     assert session.world.ruleset is ruleset  # the old rules go on
+
+
+def test_undo_keeps_the_blocks_each_action_changed_within_its_budget(tmp_path):
+    session = Session.open(None, size=(1024, 512))
+    state_bytes = sum(a.nbytes for a in session.world.state)
+    digests = []
+    for number in range(25):  # stone: it stays where it is painted, so each step changes a few blocks
+        digests.append(state_digest(session.world))
+        session.checkpoint("paint")
+        session.add("paint", {"shape": "circle", "x": 40 * number + 10, "y": 100, "radius": 4, "element": "stone"})
+        session.step()
+    history = session.history
+    assert len(history.points) == 25 and history.nbytes < state_bytes + 25 * 8 * 64 * 64 * 4
+    for number in reversed(range(25)):
+        assert session.undo() == "paint" and state_digest(session.world) == digests[number]
+    assert session.undo() is None
+    small = History(memory=state_bytes - 1)
+    assert not small.push("paint", 0, 0, list(session.world.state), [])  # one copy would pass it: no undo
+    assert small.points == []
+
+
+def test_a_full_session_refuses_more_and_what_it_saved_replays(tmp_path, monkeypatch):
+    monkeypatch.setattr(session_module, "MAX_EVENTS", 3)
+    session = Session.open(None, size=(48, 40))
+    for number in range(3):
+        session.add("paint", {"shape": "circle", "x": 10 + 5 * number, "y": 5, "radius": 2, "element": "sand"})
+        session.step()
+    with pytest.raises(SessionFull):
+        session.add("paint", {"shape": "circle", "x": 40, "y": 5, "radius": 2, "element": "sand"})
+    session.step()
+    session.save(Path("s.toml"))
+    replay = load_world("s.toml")
+    replay.world.run(replay.spec.render.frames)
+    assert state_digest(replay.world) == state_digest(session.world)

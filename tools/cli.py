@@ -18,6 +18,8 @@ from sandmod.errors import Problem, ProblemsError, display_path, printable
 from sandmod.formats.modspec import ARCHETYPES, MOD_NAME, NAME
 from sandmod.formats.recording import WriteError
 from sandmod.formats.userfiles import Refused, check_output, inside
+from sandmod.formats.worldspec import MAX_FRAMES
+from sandmod.jobs.play import keys as play_keys
 
 EXIT_USER_ERROR = 2
 
@@ -128,7 +130,7 @@ _max_memory_option = click.option(
 @click.argument("world", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", type=click.Path(path_type=Path), help="Output file, or folder for png-frames (default: WORLD.gif here).")
 @click.option("--format", "format_name", help="Output format: gif, apng, webp, png-frames, or a plugin's (default: by the output's extension).")
-@click.option("--frames", type=click.IntRange(1, 100000), help="Frames to simulate.")
+@click.option("--frames", type=click.IntRange(1, MAX_FRAMES), help="Frames to simulate.")
 @click.option("--every", type=click.IntRange(1, 1000), help="Frames simulated per image.")
 @click.option("--seed", type=click.IntRange(0, 2**32 - 1), help="Seed (overrides the world's).")
 @click.option("--scale", type=click.IntRange(1, 16), help="Pixels per cell (nearest neighbour).")
@@ -770,7 +772,7 @@ class WindowSize(click.ParamType):
         return width, height
 
 
-@cli.command()
+@cli.command(epilog="\b\nIn the window:\n" + play_keys.help_text())
 @click.argument("world", required=False, type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--size", type=WindowSize(), help="The size of a new, empty world, in cells.  [default: 320x200]")
 @click.option("--scale", type=click.IntRange(1, 16), default=2, show_default=True, help="Pixels per cell.")
@@ -780,19 +782,7 @@ class WindowSize(click.ParamType):
 @_mods_option
 def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
     """Play a world in a window: paint with the mouse, watch it fall, save the session as a world file.
-
-    \b
-    left button    paint (shift: a straight line)   right button   erase
-    middle button  pick the element under it        wheel, [ ]     brush size
-    b              round or square brush            r              replace mode
-    h, c           heat and cold brushes            q, x           spray, explode at the cursor
-    1-9, /name     choose an element (or click the bar)
-    space, n       pause, one step                  + -            speed
-    v              heat view                        ctrl+z         undo a stroke
-    ctrl+wheel     zoom                             arrows         pan (a world larger than the window)
-    s              save the session (replays bit for bit with sandmod render)
-    f5, f9         save, load a snapshot            p, g           screenshot, GIF of the last seconds
-    delete         clear                            escape         quit
+    In the window, F1 (or ?) shows every key.
 
     Saving a mod file while playing reloads the mods within a second; a
     mistake in it is shown and the old rules go on.
@@ -813,9 +803,10 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
     name = world.stem if world is not None else "play"
     folder = world.parent if world is not None else Path(".")
     session_path = folder / f"{name}-session.toml"
-    window.Play(session, scale=scale, session_path=session_path, save_on_exit=save_session).run()
-    if save_session:
-        click.echo(f"wrote {display_path(session_path)}: sandmod render {display_path(session_path)} replays the session")
+    shown = window.Play(session, scale=scale, session_path=session_path, save_on_exit=save_session)
+    shown.run()
+    if shown.saved_to is not None:
+        click.echo(shown.message)
 
 
 @cli.command()

@@ -72,6 +72,10 @@ MAX_SIZE = 16384
 
 #: Most entries in each of a world's lists (scene, emitters, sprays, explosions, timeline).
 MAX_ITEMS = 10000
+#: Most timeline events (a played session's record: about 40,000 strokes fit the 4 MB a world file may take).
+MAX_TIMELINE = 50000
+#: Most frames a render simulates (a played session: about 4.6 hours at 60 a second).
+MAX_FRAMES = 1000000
 #: Coordinates lie within this distance of the world's corner (shapes may reach past its edges).
 MAX_COORD = 2 * MAX_SIZE
 #: A stroke's segments together span at most this many cells (along their longer axes).
@@ -223,8 +227,8 @@ Shape = Annotated[Union[Rect, Circle, Line, Stroke, Fill, Picture], Field(discri
 
 class _Timed(_Strict):
     name: str | None = Field(None, pattern=r"^[A-Za-z0-9_-]+$", description="A name the timeline can start and stop it by.")
-    start: int = Field(0, ge=0, le=1_000_000, description="First frame it is on.")
-    stop: int | None = Field(None, ge=1, le=1_000_001, description="It stops before this frame (never, if left out).")
+    start: int = Field(0, ge=0, le=MAX_FRAMES, description="First frame it is on.")
+    stop: int | None = Field(None, ge=1, le=MAX_FRAMES + 1, description="It stops before this frame (never, if left out).")
 
     @model_validator(mode="after")
     def _stop_after_start(self):
@@ -334,7 +338,7 @@ class Blast(Explosion):
 class ScheduledExplosion(Blast):
     """An explosion the world sets off at a frame and place (after that frame's step)."""
 
-    frame: int = Field(ge=0, le=1_000_000, description="The frame it goes off on.")
+    frame: int = Field(ge=0, le=MAX_FRAMES, description="The frame it goes off on.")
 
 
 def _no_element(value: object) -> object:
@@ -381,7 +385,7 @@ class Event(_Strict):
     an explosion goes off after it (as ``[[explosions]]`` do).
     """
 
-    frame: int = Field(ge=0, le=1_000_000, description="The frame it happens on.")
+    frame: int = Field(ge=0, le=MAX_FRAMES, description="The frame it happens on.")
     paint: Shape | None = Field(None, description="Paint a shape (rect, circle, line, stroke, fill or image).")
     erase: Annotated[Area | None, BeforeValidator(_no_element)] = Field(None, description="Empty the cells of a shape.")
     heat: Heat | None = Field(None, description="Set the cells of a shape to a temperature, for 'frames' frames.")
@@ -409,7 +413,7 @@ class Event(_Strict):
 class RenderSettings(_Strict):
     """The ``[render]`` table (the command line may override each)."""
 
-    frames: int = Field(300, ge=1, le=100000, description="Frames to simulate.")
+    frames: int = Field(300, ge=1, le=MAX_FRAMES, description="Frames to simulate.")
     every: int = Field(2, ge=1, le=1000, description="Frames simulated per image written.")
     scale: int = Field(3, ge=1, le=16, description="Pixels per cell (nearest neighbour).")
     fps: float = Field(25, gt=0, le=50, description="Images per second when played back (GIF: delays of at least 20 ms).")
@@ -434,6 +438,6 @@ class WorldFile(_Strict):
     sprays: list[Spray] = Field(default_factory=list, max_length=MAX_ITEMS, description="Sources of flying particles.")
     explosions: list[ScheduledExplosion] = Field(default_factory=list, max_length=MAX_ITEMS, description="Blasts at given frames and places.")
     timeline: list[Event] = Field(
-        default_factory=list, max_length=MAX_ITEMS, description="Events at given frames: paint, erase, heat, start, stop, spawn, launch, explode."
+        default_factory=list, max_length=MAX_TIMELINE, description="Events at given frames: paint, erase, heat, start, stop, spawn, launch, explode."
     )
     render: RenderSettings = Field(default_factory=RenderSettings, description="How 'sandmod render' records.")

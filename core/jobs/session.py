@@ -18,28 +18,32 @@ from typing import Any, Iterable
 import numpy as np
 import tomli_w
 
-from ..errors import ProblemsError
+from ..errors import Problem, ProblemsError
 from ..formats.tomlsource import TomlSource
+from ..formats.userfiles import MAX_TEXT_BYTES
 from ..formats.validation import validate
-from ..formats.worldspec import Event, WorldFile
+from ..formats.worldspec import MAX_TIMELINE, Event, WorldFile
 from ..world.loading import LoadedWorld, load_world_spec, mod_folders, read_world_spec, world_rules
 from ..world.scene import add_event, build_world
 from ..world.world import World
+from .undo import History
 
 #: The size of a world played without a world file.
 DEFAULT_SIZE = (320, 200)
 
-#: How many strokes undo goes back.
-UNDO_DEPTH = 20
+#: Events the record holds: a world file's timeline can hold no more.
+MAX_EVENTS = MAX_TIMELINE
+#: The record's size in a world file, beside the starting file (what a world file may hold, less a margin).
+MAX_RECORD_BYTES = MAX_TEXT_BYTES - 256 * 2**10
 
 
-@dataclass
-class _Undo:
-    """The world as it was when a stroke began: its arrays, its frame, and how many events there were."""
+def _size(event: dict[str, Any]) -> int:
+    """An event's bytes in a world file."""
+    return len(tomli_w.dumps({"timeline": [event]}))
 
-    arrays: list[np.ndarray]
-    frame: int
-    events: int
+
+class SessionFull(ProblemsError):
+    """The record holds what a world file can: a new event would make the session unreplayable."""
 
 
 @dataclass
@@ -50,8 +54,13 @@ class Session:
     mod_dirs: list[Path]
     data: dict[str, Any]  # the starting world file's tables, without the session's events
     events: list[dict[str, Any]] = field(default_factory=list)  # what the player did, as [[timeline]] tables
-    undos: list[_Undo] = field(default_factory=list)
+    history: History = field(default_factory=History)
+    _added: list[list] | None = None  # what the last event set up in the world, while it may be joined
     mod_files: dict[Path, tuple[int, int]] = field(default_factory=dict)  # what the mods' folders held: (mtime, size)
+    not_replayed: list[str] = field(default_factory=list)  # why the saved world file would not replay the session
+    changes: int = 0  # what the player did to the record: events added, undone, dropped
+    saved_changes: int = 0  # ... when it was last saved
+    record_bytes: int = 0  # the events' size in a world file
 
     @classmethod
     def open(cls, path: Path | None = None, *, size: tuple[int, int] | None = None, mod_dirs: Iterable[Path] = ()) -> "Session":
@@ -79,39 +88,123 @@ class Session:
     def world(self) -> World:
         return self.loaded.world
 
+    @property
+    def unsaved(self) -> bool:
+        """Has the player done anything since the session was last saved (or opened)?"""
+        return self.changes != self.saved_changes
+
     # --- what the player does ---------------------------------------------------------------
 
     def add(self, action: str, table: dict[str, Any]) -> None:
-        """Do ``action`` ("paint", "erase", "heat", "spawn" or "explode": a timeline action, ``table``
-        as a world file writes it) before the next step. ProblemsError if it is not one."""
+        """Do ``action`` ("paint", "erase", "heat", "spawn", "launch" or "explode": a timeline action,
+        ``table`` as a world file writes it) before the next step. A stroke that goes on from the last
+        event's end on the same frame joins it. ProblemsError if it is not an action;
+        :class:`SessionFull` if a world file could hold no more."""
         event = {"frame": self.world.frame, action: table}
+        joined = self._joined(event)
+        events, size = len(self.events), self.record_bytes + _size(joined or event)
+        if joined is not None:
+            events, size = events - 1, size - _size(self.events[-1])
+        if events >= MAX_EVENTS or size > MAX_RECORD_BYTES:
+            raise SessionFull([Problem("play", None, "", "the session holds what a world file can: s saves it; what you do now is not recorded")])
+        if joined is not None:
+            self._forget_last()
+        self._record(joined or event)
+
+    def _record(self, event: dict[str, Any]) -> None:
         spec = self.loaded.spec
         spec.timeline.append(validate(Event, TomlSource("play", "", event, folder=self.loaded.source.folder)))
+        lists = self._world_lists()
+        before = [len(items) for items in lists]
         try:
             add_event(self.world, spec, self.loaded.source, len(spec.timeline) - 1)
         except ProblemsError:
             spec.timeline.pop()
             raise
+        self._added = [items for items, length in zip(lists, before) if len(items) > length]
         self.events.append(event)
+        self.record_bytes += _size(event)
+        self.changes += 1
 
-    def begin_stroke(self) -> None:
-        """Remember the world as it is, for :meth:`undo`: a stroke begins (the button went down)."""
-        state = [a.copy() for a in (*self.world.state, self.world.awake, self.world._even)]
-        self.undos.append(_Undo(state, self.world.frame, len(self.events)))
-        del self.undos[:-UNDO_DEPTH]
+    def _world_lists(self) -> list[list]:
+        world = self.world
+        return [world.paintings, world.heaters, world.sprays, world.launchers, world.scheduled]
 
-    def undo(self) -> bool:
-        """Put the world back as it was before the last stroke, forgetting that stroke's events and
-        all since (time goes back too). False if there is nothing to undo."""
-        if not self.undos:
-            return False
-        last = self.undos.pop()
-        del self.events[last.events :]
+    def _joined(self, event: dict[str, Any]) -> dict[str, Any] | None:
+        """``event`` and the last one as one stroke, if they are strokes of one brush on this frame and
+        this one starts where that one ends (None if not)."""
+        if not self.events or self._added is None:
+            return None
+        last = self.events[-1]
+        if last.keys() != event.keys() or last["frame"] != event["frame"]:
+            return None
+        (action,) = set(event) - {"frame"}
+        old, new = last[action], event[action]
+        if old.get("shape") != "stroke" or new.get("shape") != "stroke" or action not in ("paint", "erase", "heat"):
+            return None
+        if {k: v for k, v in old.items() if k != "points"} != {k: v for k, v in new.items() if k != "points"}:
+            return None
+        if old["points"][-1] != new["points"][0] or len(old["points"]) + len(new["points"]) > 4096:
+            return None
+        points = [p for n, p in enumerate(old["points"]) if n == 0 or p != old["points"][n - 1]]  # a click's [a, a] is [a]
+        return {"frame": event["frame"], action: {**old, "points": points + new["points"][1:]}}
+
+    def _forget_last(self) -> None:
+        """Take back the last event (not yet stepped): its record and what it set up in the world."""
+        for items in self._added:
+            items.pop()
+        self.loaded.spec.timeline.pop()
+        self.record_bytes -= _size(self.events.pop())
+        self._added = None
+
+    def checkpoint(self, label: str) -> None:
+        """Remember the world as it is, for :meth:`undo`: an action (a stroke, a spray, a blast, a
+        clear) begins. A world too large for undo's memory budget keeps no points."""
+        world = self.world
+        self._added = None  # a new action: never joined to the last
+        self.history.push(label, world.frame, len(self.events), list(world.state), self._marks())
+
+    def _marks(self) -> list[np.ndarray]:
+        return [self.world.awake, self.world._even]
+
+    def undo(self) -> str | None:
+        """Put the world back as it was before the last action, forgetting that action's events and
+        all since (time goes back too). The action's label; None if there is nothing to undo."""
+        if not self.history.points:
+            return None
+        keep = self._kept_state()
+        point = self.history.pop(list(self.world.state), self._marks())
+        del self.events[point.events :]
+        self._rebuild_around(keep, point.frame)
+        self.changes += 1
+        return point.label
+
+    def _kept_state(self) -> list[np.ndarray]:
+        return [*self.world.state, self.world.awake, self.world._even]
+
+    def _rebuild_around(self, arrays: list[np.ndarray], frame: int) -> None:
+        """The world built again for the session's events, holding ``arrays`` at ``frame``."""
+        seed = self.world.seed
         self._rebuild(self.loaded.ruleset)
-        for array, saved in zip((*self.world.state, self.world.awake, self.world._even), last.arrays):
-            array[...] = saved
-        self.world.frame = last.frame
-        return True
+        for array, kept in zip(self._kept_state(), arrays):
+            array[...] = kept
+        self.world.frame, self.world.seed = frame, seed
+        self.world.mark_changed()
+        self._added = None
+        self.record_bytes = sum(_size(e) for e in self.events)
+
+    def load_snapshot(self, path: Path) -> list[str]:
+        """Load a snapshot into the world: its cells and its frame. Events at its frame or later are
+        dropped (they have not happened in it), undo forgets, and the session no longer replays from
+        its world file. Returns warnings; ProblemsError if it cannot be loaded (nothing changed)."""
+        warnings = self.world.load_snapshot(path)
+        frame = self.world.frame
+        self.events = [e for e in self.events if e["frame"] < frame]
+        self._rebuild_around(self._kept_state(), frame)
+        self.history.clear()
+        self.changes += 1
+        self.not_replayed.append(f"a snapshot was loaded at frame {frame}")
+        return warnings
 
     def step(self) -> None:
         self.world.step()
@@ -143,22 +236,21 @@ class Session:
         problems: the new rules are in force. The kernel is not compiled again: the rules are its
         tables' contents, never its code."""
         base = self.loaded
-        try:
-            rules = world_rules(self._starting_spec(), base.source, base.path, mod_dirs=self.mod_dirs)
-        except ProblemsError as error:
-            return [str(problem) for problem in error.problems]
         with tempfile.TemporaryDirectory(prefix="sandmod-play-") as scratch:
             snapshot = Path(scratch) / "world.npz"
-            self.world.save_snapshot(snapshot)
-            self.loaded = replace(base, registry=rules.registry, ruleset=rules.ruleset)
-            self._rebuild(rules.ruleset)
             try:
-                self.world.load_snapshot(snapshot)
-            except ProblemsError as error:  # an element the world holds is gone: keep the old rules
+                rules = world_rules(self._starting_spec(), base.source, base.path, mod_dirs=self.mod_dirs)
+                self.world.save_snapshot(snapshot)
+                self.loaded = replace(base, registry=rules.registry, ruleset=rules.ruleset)
+                self._rebuild(rules.ruleset)  # an event naming an element that is gone: a problem
+                self.world.load_snapshot(snapshot)  # a cell of an element that is gone: a problem
+            except ProblemsError as error:  # the old world, untouched, goes on under the old rules
                 self.loaded = base
-                self._rebuild(base.ruleset)
-                self.world.load_snapshot(snapshot)
                 return [str(problem) for problem in error.problems]
+        self.world.wake()  # settled cells feel the new rules
+        self.history.clear()
+        self._added = None
+        self.not_replayed.append(f"the mods were reloaded at frame {self.world.frame}")
         return []
 
     def _starting_spec(self) -> WorldFile:
@@ -167,7 +259,8 @@ class Session:
     def _rebuild(self, ruleset) -> None:
         """The world built afresh from the starting file and the session's events, under ``ruleset``."""
         spec = self._starting_spec()
-        spec.timeline.extend(validate(Event, TomlSource("play", "", e)) for e in self.events)
+        first = len(spec.timeline)
+        spec.timeline.extend(self.loaded.spec.timeline[first : first + len(self.events)])  # validated when added
         world = build_world(spec, ruleset, self.loaded.source)
         world.threads = self.world.threads
         self.loaded = replace(self.loaded, spec=spec, world=world)
@@ -185,8 +278,10 @@ class Session:
         return tomli_w.dumps(data)
 
     def save(self, path: Path) -> None:
-        """Write :meth:`world_file` to ``path``, whole or not at all."""
+        """Write :meth:`world_file` to ``path``, whole or not at all (WriteError if it cannot be).
+        :attr:`not_replayed` says why it would not replay the session bit for bit, if it would not."""
         from ..formats.recording import atomic_path
 
         with atomic_path(Path(path)) as temporary:
             temporary.write_text(self.world_file(), encoding="utf-8")
+        self.saved_changes = self.changes

@@ -236,6 +236,7 @@ class World:
         )
         chunks = (-(-height // CHUNK), -(-width // CHUNK))
         self.awake = np.ones(chunks, np.uint16)  # wake marks: which chunks (and rows of them) to update on the next step
+        self._changed = np.ones(chunks, np.uint16)  # chunks that may look different since image(changed_only=True) drew them
         self._woken = _on_own_lines(chunks, np.uint16)  # the kernel's scratch: wake marks made during a step
         self._even = np.zeros(chunks, np.uint8)  # chunks whose heat is even: the kernel's conduction skips them
         self._stirred = _on_own_lines(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
@@ -368,6 +369,10 @@ class World:
         scaled = (np.abs(energy) * t.heat_recip[s.cells[ys, xs]]) >> 32  # as the kernel does: exact on both sides of 0
         return np.where(energy < 0, -scaled, scaled)
 
+    def temperature_at(self, x: int, y: int) -> float:
+        """One cell's temperature, in degrees Celsius."""
+        return float(self._temperature_units(slice(y, y + 1), slice(x, x + 1))[0, 0]) / TEMP_ONE
+
     def set_temperature(self, mask: np.ndarray, celsius: float) -> None:
         """Heat or cool the cells of ``mask`` to ``celsius`` degrees."""
         ys, xs = np.nonzero(mask)
@@ -389,6 +394,7 @@ class World:
         if ys is None or xs is None:
             self.awake[:] = WHOLE
             self._even[:] = 0
+            self._changed[:] = 1
             return
         ys, xs = np.asarray(ys, np.int64), np.asarray(xs, np.int64)
         if ys.size == 0:
@@ -399,6 +405,7 @@ class World:
                 cx = np.clip(xs + dx, 0, self.width - 1) >> CHUNK_SHIFT
                 self.awake[cy, cx] = WHOLE
                 self._even[cy, cx] = 0
+                self._changed[cy, cx] = 1
 
     @property
     def awake_fraction(self) -> float:
@@ -420,6 +427,12 @@ class World:
     def _explode(self, rows: np.ndarray, salt: int) -> None:
         key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
         _kernel().explode(self.state, self.tables, rows, len(rows), key, self.ruleset.particle, self.awake, self._even)
+        self._changed |= self.awake  # what it woke is what it changed
+
+    def mark_changed(self) -> None:
+        """Have the next :meth:`image` with ``changed_only`` draw every chunk (after writing ``state``
+        arrays directly; the world's own methods keep track themselves)."""
+        self._changed[:] = 1
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
@@ -444,6 +457,7 @@ class World:
         for heater in self.heaters:
             if heater.active(self.frame):
                 self.set_temperature(heater.area(self.cells), heater.celsius)
+        self._changed |= self.awake  # the kernel changes only chunks awake before it runs, or woken by it
         hands = self._thread_count()
         started = perf_counter()
         stepper = kernel.step_at_once if hands > 1 else kernel.step
@@ -471,6 +485,7 @@ class World:
         due = [row for frame, row in self.scheduled if frame == self.frame]
         if due:  # the world file's, in its order
             self._explode(np.array(due), 1)
+        self._changed |= self.awake
         self.frame += 1
 
     def _thread_count(self) -> int:
@@ -508,14 +523,14 @@ class World:
 
         A cell shows its element's colour in its own shade; scorched cells are
         darker, and cells hotter than the glow point glow red, orange, then
-        yellow. With ``changed_only``, only the chunks that may have changed in
-        the last step are drawn (``out`` holds the rest from before).
+        yellow. With ``changed_only``, only the chunks that may have changed
+        since the last such call are drawn (``out`` holds the rest from then).
         """
         from ..engine import pixels
 
         looks, s = self.ruleset.looks, self.state
         out = np.empty((self.height, self.width), np.uint8) if out is None else out
-        chunks = self.awake if changed_only else _ALL_CHUNKS
+        chunks = self._take_changed() if changed_only else _ALL_CHUNKS
         pixels.palette_indices(
             s.cells, s.carry, s.shade, s.flags, s.heat, self.tables.heat_recip,
             looks.normal, looks.scorched, looks.glow, looks.glow_from, _GLOW_STEP, looks.glow_energy, chunks, out,
@@ -524,12 +539,19 @@ class World:
 
     def heat_image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
         """Every cell's temperature as a colour, RGB (height, width, 3): blue cold, dark at 20 degrees,
-        then purple, red, orange, yellow and white (see :data:`sandmod.engine.pixels.HEAT_SCALE`)."""
+        then purple, red, orange, yellow and white (see :data:`sandmod.engine.pixels.HEAT_SCALE`).
+        ``changed_only`` as for :meth:`image`, whose record of changes it shares."""
         from ..engine import pixels
 
         out = np.empty((self.height, self.width, 3), np.uint8) if out is None else out
-        pixels.heat_rgb(self.cells, self.state.heat, self.tables.heat_recip, _heat_colours(), self.awake if changed_only else _ALL_CHUNKS, out)
+        pixels.heat_rgb(self.cells, self.state.heat, self.tables.heat_recip, _heat_colours(), self._take_changed() if changed_only else _ALL_CHUNKS, out)
         return out
+
+    def _take_changed(self) -> np.ndarray:
+        """The chunks changed since the last call (a copy), forgotten here."""
+        changed = self._changed.copy()
+        self._changed[:] = 0
+        return changed
 
     def rgb(self) -> np.ndarray:
         """The frame in colour, RGB (height, width, 3): :meth:`image` through the palette."""

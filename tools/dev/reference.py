@@ -220,6 +220,8 @@ def _command(name: str, command: click.Command) -> list[str]:
     params = [p for p in command.params if not getattr(p, "hidden", False) and p.name != "help"]
     if params:
         out += ["| option | takes | what |", "|---|---|---|"] + [_option_row(p) for p in params] + [""]
+    if command.epilog:
+        out += [_unwrap(inspect.cleandoc(command.epilog)), ""]
     if isinstance(command, click.Group):
         for sub in sorted(command.commands):
             out += _command(f"{name} {sub}", command.commands[sub])
