@@ -229,9 +229,12 @@ class View:
         lines = help_lines()
         per_column = -(-len(lines) // 2)
         column = self.size[0] // 2
+        keys_width = max(self.font.size(keys)[0] for keys, _ in lines) + 12
         self._text("sandmod play: every key (F1 or ? closes this)", (12, 8))
         for number, (keys, what) in enumerate(lines):
             left = 12 + (number // per_column) * column
             top = 30 + (number % per_column) * 16
             self._text(keys, (left, top), (255, 220, 120))
-            self._text(what[: (column - 110) // 6], (left + 100, top), TEXT)
+            while what and self.font.size(what)[0] > column - keys_width - 16:
+                what = what[:-2] + "…"[: len(what) > 1]
+            self._text(what, (left + keys_width, top), TEXT)

@@ -424,7 +424,8 @@ class Play:
         element = world.ruleset.elements[brush.element]
         state = "paused" if self.paused else f"x{self.speed:g}"
         tool = "erase" if self.stroke == "erase" else brush.tool if brush.tool != "paint" else element.name
-        parts = [f"{self.clock.get_fps():3.0f} fps", f"frame {world.frame} {state}",
+        fps = self.clock.get_fps()  # 0 until the clock has ticked for a while
+        parts = [f"{fps:3.0f} fps" if fps else "", f"frame {world.frame} {state}",
                  f"{tool} {brush.size}{' square' if brush.square else ''}{' replace' if brush.replace else ''}"]
         cell = self._cursor()
         if cell is not None:
@@ -438,7 +439,7 @@ class Play:
             parts.append(self.message)
         else:
             parts.append("F1: every key")
-        return "   ".join(parts)
+        return "   ".join(part for part in parts if part)
 
 
 def benchmark(session: Session, scale: int, frames: int, busy: bool) -> dict:
