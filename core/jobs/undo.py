@@ -80,8 +80,8 @@ class History:
             return False
         if self.base:
             newest = self.points[-1]
-            grid = np.zeros_like(_differing(self.base[0], arrays[0]))
-            for kept, now in zip(self.base, arrays):
+            grid = _differing(self.base[0], arrays[0])
+            for kept, now in zip(self.base[1:], arrays[1:]):
                 grid |= _differing(kept, now)
             newest.blocks = np.argwhere(grid)
             newest.saved = [_cut(kept, newest.blocks) for kept in self.base]

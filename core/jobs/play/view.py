@@ -71,9 +71,9 @@ class View:
     def show_heat(self, on: bool) -> None:
         self.heat_view, self.everything = on, True
 
-    def refresh(self, world: World) -> bool:
+    def refresh(self, world: World) -> None:
         """Bring the picture up to date with ``world``: the chunks changed since the last refresh, or
-        everything. True if anything was drawn."""
+        everything."""
         if world is not self.world:
             self.attach(world)
         if self.heat_view:
@@ -84,7 +84,6 @@ class View:
             self._preview(world)
             self.pg.surfarray.blit_array(self.cells_surface, self.pixels.T)
         self.everything, self.scaled = False, None
-        return True
 
     def _preview(self, world: World) -> None:
         """Paintings due before the next step, shown now (paused, they would wait for it)."""
