@@ -19,6 +19,7 @@ from sandmod.tools.cli import cli  # noqa: E402
 from sandmod.world.loading import load_world  # noqa: E402
 
 SCALE = 2
+GOO = '[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n'
 
 
 @pytest.fixture(autouse=True)
@@ -55,6 +56,11 @@ def frames(play: Play, count: int) -> None:
 def key(play: Play, name: int, mod: int = 0) -> None:
     post(pygame.KEYDOWN, key=name, mod=mod, unicode="")
     frames(play, 1)
+
+
+def capture_outcome(play: Play) -> str:
+    """What came of the last capture, waiting for it (the status line takes it once it is done)."""
+    return play.capture_job.result(wait=True) if play.capture_job is not None else play.message
 
 
 def test_a_scripted_session_replays_from_the_world_file_it_saves():
@@ -95,14 +101,14 @@ def test_a_scripted_session_replays_from_the_world_file_it_saves():
     assert state_digest(replay.world) == state_digest(play.session.world)
     key(play, pygame.K_p)
     key(play, pygame.K_g)
-    assert play.capture_job.result(wait=True).startswith("saved")
+    assert capture_outcome(play).startswith("saved")
     assert Path("play-screenshot.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and Path("play-capture.gif").read_bytes()[:6] == b"GIF89a"
 
 
 def test_saving_a_mod_reloads_it_and_a_broken_one_is_shown_while_the_old_rules_go_on():
     Path("mods").mkdir()
     mod = Path("mods/goo.toml")
-    mod.write_text('[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n')
+    mod.write_text(GOO)
     play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
     play.next_mod_check = float("inf")  # checked by hand below, not by the clock
     frames(play, 2)
@@ -202,7 +208,7 @@ def drag(play: Play, cells, button: int = 1) -> None:
 def test_after_every_kind_of_action_the_screen_shows_the_world_cell_for_cell():
     Path("mods").mkdir()
     mod = Path("mods/goo.toml")
-    mod.write_text('[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n')
+    mod.write_text(GOO)
     play = Play(Session.open(None, size=(96, 64)), scale=SCALE, fixed_steps=2)
     play.next_mod_check = float("inf")
     ruleset = play.session.world.ruleset
@@ -265,7 +271,7 @@ def test_writing_where_it_cannot_is_a_message_and_play_goes_on(tmp_path):
     drag(play, [(5, 5), (20, 5)])
     for name in (pygame.K_s, pygame.K_p, pygame.K_F5, pygame.K_g):
         key(play, name)
-    play.capture_job.result(wait=True)
+    capture_outcome(play)
     assert play.saved_to == tmp_path / "w-session.toml"  # the current folder, the first being read-only
     assert {"w-session.toml", "play-screenshot.png", "play-snapshot.npz", "play-capture.gif"} <= {p.name for p in tmp_path.iterdir()}
     Path(tmp_path).chmod(0o555)
@@ -296,7 +302,7 @@ def test_escape_with_unsaved_strokes_asks_and_the_close_button_saves():
 def test_a_reload_that_cannot_apply_is_shown_and_the_old_rules_go_on():
     Path("mods").mkdir()
     mod = Path("mods/goo.toml")
-    mod.write_text('[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n')
+    mod.write_text(GOO)
     play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
     play.next_mod_check = float("inf")
     play.brush.element = play.session.world.ruleset.index("goo")

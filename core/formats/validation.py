@@ -74,7 +74,8 @@ def _message(model: type[BaseModel], data: Any, loc: Loc, err: Any) -> str:
     comparisons = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
     if kind in comparisons:
         bound = next(iter(ctx.values()))
-        return f"must be {comparisons[kind]} {bound:g}{got}"
+        shown = str(bound) if isinstance(bound, int) else f"{bound:g}"  # 1000000, not 1e+06
+        return f"must be {comparisons[kind]} {shown}{got}"
     if kind == "string_pattern_mismatch":
         return PATTERN_HINTS.get(ctx.get("pattern", ""), f"must match {ctx.get('pattern')}") + got
     if kind == "union_tag_invalid":
