@@ -1,5 +1,5 @@
 """``python -m sandmod`` runs the command line."""
 
-from sandmod.tools.cli import main
+from sandmod.tools.entry import main
 
 main()

@@ -149,7 +149,7 @@ def test_a_failing_run_has_its_error_in_its_row(sweep, tmp_path):
     [
         (('"elements.sand.friction"', '"elements.sand"'), "parameters: 'elements.sand' is not 'elements.NAME.FIELD'"),
         (("[0.3, 1.2]", "[0.3, -1]"), "friction: must be >= 0"),
-        (('"elements.sand.friction"', '"elements.snad.friction"'), "sweep.toml:7:1: parameters: elements.snad.friction: no element of the world's mods (base, glass, sand)"),
+        (('"elements.sand.friction"', '"elements.snad.friction"'), "sweep.toml:8:1: parameters.elements.snad.friction: elements.snad.friction: no element of the world's mods (base, glass, sand)"),
         (('worlds = ["heap*.toml"]', 'worlds = ["../heap.toml"]'), "sweep.worlds.0:"),
         (('worlds = ["heap*.toml"]', 'worlds = ["nothing*.toml"]'), "no world file 'nothing*.toml'"),
     ],

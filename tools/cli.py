@@ -20,6 +20,7 @@ from sandmod.formats.recording import WriteError
 from sandmod.formats.userfiles import Refused, check_output, inside
 from sandmod.formats.worldspec import MAX_FRAMES
 from sandmod.jobs.play import keys as play_keys
+from sandmod.tools.entry import EXIT_INTERRUPTED
 
 EXIT_USER_ERROR = 2
 
@@ -34,6 +35,9 @@ class _Group(click.Group):
             for problem in exc.problems:
                 click.echo(str(problem), err=True)
             ctx.exit(EXIT_USER_ERROR)
+        except KeyboardInterrupt:  # Ctrl-C: what was being written is gone, and a shell's status says so
+            click.echo("interrupted", err=True)
+            ctx.exit(EXIT_INTERRUPTED)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -417,7 +421,7 @@ def validate(paths, max_memory, mod_dirs) -> None:
         from sandmod.jobs.batch import read_sweep
 
         try:
-            read_sweep(sweep, Path("."), _mod_folders(mod_dirs))
+            read_sweep(sweep, Path("."), _mod_folders(mod_dirs), max_memory=max_memory)
         except ProblemsError as exc:
             problems.extend(exc.problems)
     for warning in report.warnings:
@@ -546,6 +550,11 @@ def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
 @_mods_option
 def new_world(name, mods, pour, size, mod_dirs) -> None:
     """Write NAME.toml: a world with a floor and an emitter, recording the mods and versions it is made with."""
+    path = Path(name if name.endswith(".toml") else f"{name}.toml")
+    _write_new(path, _new_world_text(path, mods, pour, size, mod_dirs))
+
+
+def _new_world_text(path: Path, mods, pour, size, mod_dirs) -> str:
     from sandmod.jobs import scaffold
     from sandmod.world.loading import load_registry
     from sandmod.rules.modset import find_mods
@@ -569,94 +578,144 @@ def new_world(name, mods, pour, size, mod_dirs) -> None:
         except KeyError as exc:
             raise click.BadParameter(exc.args[0], param_hint="'--pour'") from None
     text = scaffold.new_world(size, list(mods) or None, {m.name: m.spec.mod.version for m in ruleset.mods}, pour)
-    path = Path(name if name.endswith(".toml") else f"{name}.toml")
     scaffold.check_world(text, display_path(path))
-    _write_new(path, text)
+    return text
 
 
 @new.command("sweep")
 @click.argument("name", callback=_name(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", "file name"))
-@click.option("--world", "world", default="world.toml", show_default=True, help="The world file it runs (relative to the sweep).")
-def new_sweep(name, world) -> None:
+@click.option("--world", "world", help="The world file it runs, relative to the sweep (default: world.toml, written too if it is not there).")
+@_mods_option
+def new_sweep(name, world, mod_dirs) -> None:
     """Write NAME.toml: a commented sweep for sandmod batch, over one world, seeds and sand's friction."""
     from sandmod.jobs import scaffold
 
     stem = name[:-5] if name.endswith(".toml") else name
+    if world is not None and not Path(world).is_file():
+        raise click.BadParameter(f"no world file {world!r} here (sandmod new world makes one)", param_hint="'--world'")
+    if world is None:
+        world = "world.toml"
+        if not Path(world).exists():  # a sweep that runs as written needs a world: one pouring sand
+            _write_new(Path(world), _new_world_text(Path(world), (), "sand", (160, 120), mod_dirs))
     _write_new(Path(f"{stem}.toml"), scaffold.new_sweep(stem, world))
 
 
 @cli.command()
 @click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", "out", type=click.Path(file_okay=False, path_type=Path), help="Folder for the runs and the results (default: the sweep's name, here).")
-@click.option("-j", "--jobs", type=click.IntRange(1, 256), help="Worker processes (default: one per CPU).")
+@click.option("-j", "--jobs", type=click.IntRange(1, 256), help="Runs at a time: worker processes, or Dask workers (default: one per CPU).")
 @click.option("--executor", type=click.Choice(["process", "dask"]), default="process", show_default=True,
               help="A pool of local processes, or Dask (the dask extra): a local cluster, or --scheduler's.")
 @click.option("--scheduler", metavar="ADDRESS", help="With --executor dask: an existing cluster's scheduler, e.g. tcp://host:8786.")
 @click.option("--resume", is_flag=True, help="Go on with the runs in the folder: those done are kept, the rest run.")
-@click.option("--dry-run", is_flag=True, help="List the runs and do none.")
+@click.option("--force", is_flag=True, help="Write into a folder that holds files sandmod batch did not write (they are left alone).")
+@click.option("--dry-run", is_flag=True, help="List the runs and do none (with --resume: which are done).")
+@click.option("--long", "long_table", is_flag=True, help="Also write results_long.csv: a row per run and metric.")
+@_max_memory_option
+@click.option("-q", "--quiet", is_flag=True, help="No progress or summary; failures and problems only.")
 @_mods_option
-def batch(sweep_file, out, jobs, executor, scheduler, resume, dry_run, mod_dirs) -> None:
+def batch(sweep_file, out, jobs, executor, scheduler, resume, force, dry_run, long_table, max_memory, quiet, mod_dirs) -> None:
     """Run a sweep: every world x seed x combination of parameters, in parallel.
 
     Each run's files go into OUT/runs/ID/ (an animation, snapshots, its last
-    frame, its row), and appear only when the run is complete; OUT/results.csv
-    (and results.parquet, with pyarrow) has a row per run with its parameters,
-    seed, time, status and metrics, and OUT/contact_sheet.png every run's last
-    frame. The id hashes the world, the mods, the parameters, the seed and
-    sandmod's version: the same run makes the same files on any executor and
-    any number of workers. A run that fails has its error in its row; the
-    others go on (exit status 1 at the end).
+    frame, its row), and appear only when the run is complete; its log is
+    OUT/logs/ID.log. OUT/results.csv (and results.parquet, with pyarrow) has
+    a row per run, OUT/summary.csv each metric's mean and standard deviation
+    across seeds, OUT/contact_sheet.png every run's last frame. The same run
+    makes the same files on any executor and any number of workers. A run
+    that fails has its error in its row and its log; the others go on (exit
+    status 1). Ctrl-C or SIGTERM writes the table of the runs done and exits
+    130 or 143: --resume goes on. At most 100,000 runs in one sweep.
     """
     from sandmod.jobs import batch as batching
-    from sandmod.jobs.warmup import compile_kernels, compile_new_kernels
 
     if scheduler is not None and executor != "dask":
         raise click.UsageError("--scheduler goes with --executor dask")
     if executor == "dask" and importlib.util.find_spec("distributed") is None:
         raise click.ClickException('the dask executor needs dask: pip install "sandmod[dask]"')
-    out = out or Path(sweep_file.stem)
-    sweep = batching.read_sweep(sweep_file, out, _mod_folders(mod_dirs))
-    runs = sweep.runs
+    out = (out or Path(sweep_file.stem)).absolute()  # as the workers see it, wherever they run
+    workers = jobs or os.cpu_count() or 1
+    sweep = batching.read_sweep(sweep_file, out, _mod_folders(mod_dirs), jobs=workers, max_memory=max_memory)
+    folder = batching.OutputFolder(out)
     if dry_run:
-        for run in runs:
-            values = ", ".join(f"{k} = {v}" for k, v in run.parameters.items())
-            click.echo(f"{run.id}  {run.world}  seed {run.seed}" + (f"  {values}" if values else ""))
-        click.echo(f"{_counted(len(runs), 'run')}")
+        _dry_run(sweep.runs, folder if resume else None)
         return
-    folder = out / batching.RUNS
-    if folder.is_dir() and any(folder.iterdir()) and not resume:
-        raise click.UsageError(f"{display_path(out)} holds the runs of an earlier batch: --resume to go on with them, or another -o")
-    folder.mkdir(parents=True, exist_ok=True)
-    for stale in folder.glob(".*.part"):  # what a killed batch was writing
-        shutil.rmtree(stale, ignore_errors=True)
-    todo = [run for run in runs if batching.done_row(run) is None]
+    try:
+        check_output(out, folder=True)
+    except Refused as exc:
+        raise ProblemsError([Problem(display_path(out), None, "", str(exc))]) from None
+    with _writing(out):
+        folder.claim(resume=resume, force=force)
+    try:
+        with _writing(out):
+            _batch(sweep, folder, executor, workers, scheduler, long_table, quiet)
+    finally:
+        folder.clear_parts()
+        folder.release()
+
+
+def _dry_run(runs, folder) -> None:
+    """List the runs; with a folder, say which of them are done there."""
+    done = 0
+    for run in runs:
+        finished = folder is not None and folder.done_row(run, clear=False) is not None
+        done += finished
+        values = ", ".join(f"{k} = {v}" for k, v in run.parameters.items())
+        click.echo(f"{run.id}  {run.world}  seed {run.seed}" + (f"  {values}" if values else "") + ("  (done)" if finished else ""))
+    click.echo(_counted(len(runs), "run") + (f", {done} done" if folder is not None else ""))
+
+
+def _batch(sweep, folder, executor: str, workers: int, scheduler: str | None, long_table: bool, quiet: bool) -> None:
+    """Run what is not done, then write the tables and the contact sheet; on an interruption, the
+    tables of the runs done, and exit 130 (Ctrl-C) or 143 (SIGTERM)."""
+    from sandmod.jobs import batch as batching
+    from sandmod.jobs.warmup import compile_kernels, compile_new_kernels
+
+    runs = sweep.runs
+    before = {run.id: row for run in runs if (row := folder.done_row(run)) is not None}
+    todo = [run for run in runs if run.id not in before]
     if todo:  # compiled once, and loaded here, before the workers start (forked, they have it)
-        compile_new_kernels(announce=_say)
+        compile_new_kernels(announce=None if quiet else _say)
         compile_kernels()
-    started, finished, failed, fresh = time.perf_counter(), 0, 0, {}
-    for row in batching.run_all(todo, executor, jobs or os.cpu_count() or 1, scheduler):
-        fresh[row["id"]] = row
-        finished += 1
-        failed += row["status"] != "done"
-        elapsed = time.perf_counter() - started
-        left = elapsed / finished * (len(todo) - finished)
-        line = f"batch: {finished} of {len(todo)} runs, {failed} failed, {left:.0f} s left"
-        if sys.stderr.isatty():  # one line, redrawn
-            click.echo(f"\r{line}   " + ("\n" if finished == len(todo) else ""), err=True, nl=False)
-        else:
-            _say(line)
-    rows = [fresh.get(run.id) or batching.done_row(run) for run in runs]
-    written = batching.write_table(rows, out)
-    sheet = batching.contact_sheet(rows, runs, out)
+    started, fresh, interrupted = time.perf_counter(), {}, None
+    try:
+        for row in batching.run_all(todo, executor, workers, scheduler):
+            fresh[row["id"]] = row
+            if not quiet:
+                _batch_progress(fresh, len(todo), started)
+    except batching.Interrupted as stop:
+        interrupted = stop.status
+    folder.clear_parts()
+    if interrupted:  # the workers may have finished more runs than reached this process
+        fresh.update({run.id: row for run in todo if run.id not in fresh and (row := folder.done_row(run, clear=False))})
+    rows = [row for run in runs if (row := fresh.get(run.id) or before.get(run.id)) is not None]
+    written = batching.write_tables(rows, folder.path, long=long_table)
+    failed = [row for row in fresh.values() if row["status"] != "done"]
+    for row in failed:
+        click.echo(f"failed: {row['id']} {row['world']} seed {row['seed']}: {row['error']} (log: {display_path(folder.path / 'logs' / (row['id'] + '.log'))})", err=True)
+    if interrupted:
+        _say(f"interrupted: {len(rows)} of {_counted(len(runs), 'run')} done, in {display_path(written[0])}; "
+             f"the same command with --resume runs the rest")
+        sys.exit(interrupted)
+    sheet = batching.contact_sheet(rows, runs, folder.path)
     seconds = time.perf_counter() - started
-    rate = f", {len(todo) / seconds * 60:.1f} runs a minute" if todo and seconds > 0 else ""
-    names = ", ".join(display_path(p) for p in [*written, *([sheet] if sheet else [])])
-    click.echo(f"{_counted(len(runs), 'run')} ({len(runs) - len(todo)} done before), {failed} failed, in {seconds:.1f} s{rate}: {names}")
-    for row in fresh.values():
-        if row["status"] != "done":
-            click.echo(f"failed: {row['id']} {row['world']} seed {row['seed']}: {row['error']}", err=True)
+    if not quiet:
+        rate = f", {len(todo) / seconds * 60:.1f} runs a minute" if todo and seconds > 0 else ""
+        names = ", ".join(display_path(p) for p in [*written, *([sheet] if sheet else [])])
+        click.echo(f"{_counted(len(runs), 'run')} ({len(before)} done before), {len(failed)} failed, in {seconds:.1f} s{rate}: {names}")
     if failed:
         sys.exit(1)
+
+
+def _batch_progress(fresh: dict, total: int, started: float) -> None:
+    finished = len(fresh)
+    failed = sum(row["status"] != "done" for row in fresh.values())
+    left = (time.perf_counter() - started) / finished * (total - finished)
+    line = f"batch: {finished} of {total} runs, {failed} failed, {left:.0f} s left"
+    if sys.stderr.isatty():  # one line, redrawn
+        click.echo(f"\r{line}   " + ("\n" if finished == total else ""), err=True, nl=False)
+    else:
+        _say(line)
 
 
 @cli.command()
@@ -964,21 +1023,3 @@ def _bench_recording(formats, runs, thread_counts, as_json) -> None:
                     f"encoding {result.images_per_second:.0f} images/s ({result.encode_share:.0%} of the render), "
                     f"images {steps / result.image_seconds:.0f}/s, steps {steps / result.step_seconds:.0f}/s, {result.file_mb:.2f} MB",
                 )
-
-
-def main() -> None:
-    """Entry point of the ``sandmod`` console script.
-
-    SIGTERM and SIGHUP end it as Ctrl-C does: by an exception, so that every
-    half-written output is removed on the way out; the exit status is 128 plus
-    the signal's number, as a shell reports a process the signal killed.
-    """
-    import signal
-
-    def leave(signum, frame):
-        raise SystemExit(128 + signum)
-
-    for name in ("SIGTERM", "SIGHUP"):
-        if hasattr(signal, name) and signal.getsignal(getattr(signal, name)) is signal.SIG_DFL:
-            signal.signal(getattr(signal, name), leave)
-    cli(prog_name="sandmod")

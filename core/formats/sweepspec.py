@@ -62,10 +62,19 @@ class SweepInfo(_Strict):
     """The ``[sweep]`` table: which worlds, which seeds, how long."""
 
     worlds: list[str] = Field(min_length=1, max_length=1000, description="World files, or globs of them, relative to the sweep file.")
-    seeds: list[Seed] | SeedRange = Field(
+    seeds: Annotated[list[Seed], Field(max_length=MAX_RUNS)] | SeedRange = Field(
         default_factory=lambda: [0], description="Seeds to run each world with: a list, or { from = 0, to = 99 }."
     )
     frames: int | None = Field(None, ge=1, le=100000, description="Frames each run simulates (default: each world's own).")
+
+    @field_validator("seeds", mode="before")
+    @classmethod
+    def _unique_seeds(cls, seeds: Any) -> Any:
+        if isinstance(seeds, list):
+            if not seeds:
+                raise ValueError("at least one seed")
+            _unique(seeds)
+        return seeds
 
     def seed_list(self) -> list[int]:
         return self.seeds.values() if isinstance(self.seeds, SeedRange) else list(self.seeds)
@@ -89,7 +98,7 @@ class MetricSettings(_Strict):
         default_factory=list, max_length=100, description="Frames to measure at (default: the last)."
     )
     names: list[str] | None = Field(
-        None, description="Metrics to take (default: all: counts, centre, extent, awake, heat, and plugins')."
+        None, max_length=100, description="Metrics to take (default: all: counts, centre, extent, awake, heat, and plugins')."
     )
 
 
@@ -113,4 +122,30 @@ class SweepFile(_Strict):
                 raise ValueError(f"{path!r} is not 'elements.NAME.FIELD', 'world.FIELD' or 'render.FIELD'")
             if not values:
                 raise ValueError(f"{path!r} needs at least one value")
+            kinds = {_kind(value) for value in values}
+            if None in kinds or len(kinds) > 1:
+                raise ValueError(f"{path!r}: the values must be all numbers, all text or all true/false")
+            try:
+                _unique(values)
+            except ValueError as error:
+                raise ValueError(f"{path!r}: {error}") from None
         return parameters
+
+
+def _kind(value: Any) -> str | None:
+    """'number', 'text' or 'bool'; None for what a parameter cannot be (a list, a table, a date)."""
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, (int, float)):
+        return "number"
+    return "text" if isinstance(value, str) else None
+
+
+def _unique(values: list[Any]) -> None:
+    seen = set()
+    for value in values:
+        if not isinstance(value, (int, float, str)):
+            continue  # not a value at all: its own check says so
+        if value in seen:
+            raise ValueError(f"{value!r} is listed twice (each would be the same runs)")
+        seen.add(value)

@@ -50,17 +50,29 @@ class Framing:
         return enlarge(frame, self.scale)
 
 
+def side_problem(recorder: RecorderSpec, world: World, framing: Framing) -> str | None:
+    """Why the format cannot hold images of this framing, or None."""
+    width, height = framing.size(world)
+    if recorder.max_side is not None and max(width, height) > recorder.max_side:
+        return f"{recorder.name} images are at most {recorder.max_side} pixels a side; these would be {width}x{height}"
+    return None
+
+
+def kept_bytes(recorder: RecorderSpec, world: World, framing: Framing, frames: int, every: int) -> tuple[int, int]:
+    """(images, bytes): what a recording keeps in memory until it closes, and the image being drawn."""
+    width, height = framing.size(world)
+    images = frames // every + 1
+    return images, int(images * width * height * recorder.kept_bytes_per_pixel) + 4 * width * height
+
+
 def render_problems(recorder: RecorderSpec, world: World, framing: Framing, frames: int, every: int, memory: MemoryBudget) -> list[str]:
     """Why a render cannot be done, found before it starts: images too large for the format, or
     more memory than ``memory`` has left for the images the format keeps until it closes."""
+    too_wide = side_problem(recorder, world, framing)
+    if too_wide:
+        return [too_wide + " (a smaller --scale or --crop, or another format)"]
     width, height = framing.size(world)
-    if recorder.max_side is not None and max(width, height) > recorder.max_side:
-        return [
-            f"{recorder.name} images are at most {recorder.max_side} pixels a side; these would be {width}x{height} "
-            "(a smaller --scale or --crop, or another format)"
-        ]
-    images = frames // every + 1
-    kept = int(images * width * height * recorder.kept_bytes_per_pixel) + 4 * width * height  # and the frame being drawn
+    images, kept = kept_bytes(recorder, world, framing, frames, every)
     over = memory.take(kept, f"{recorder.name} keeping {images} images of {width}x{height}")
     return [] if over is None else [over + "; or fewer --frames, a larger --every, a smaller --scale, a streamed format (gif, png-frames)"]
 

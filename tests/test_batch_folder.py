@@ -1,0 +1,128 @@
+"""``sandmod batch``'s output folder: locked, never someone else's files overwritten, tampered runs
+done again, interruptions that leave the table of the runs done and nothing half-written."""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from sandmod.jobs import batch as batching
+from test_batch import SWEEP, WORLD, invoke, same_files, table
+
+
+@pytest.fixture
+def sweep(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    Path("worlds").mkdir()
+    Path("worlds/heap.toml").write_text(WORLD)
+    text = SWEEP.replace('worlds = ["*.toml"]', 'worlds = ["heap.toml"]').replace('format = "gif"', 'format = "none"')
+    Path("worlds/sweep.toml").write_text(text)
+    return Path("worlds/sweep.toml")
+
+
+def test_a_second_batch_into_a_folder_in_use_is_refused_and_deletes_nothing(sweep):
+    first = batching.OutputFolder(Path("out"))
+    first.claim(resume=False, force=False)
+    part = Path("out/runs/.abc.123.part")
+    part.mkdir()
+    try:
+        result = invoke("batch", str(sweep), "-o", "out", "--resume")
+        assert result.exit_code == 2 and "another batch is writing into this folder" in result.output
+        assert part.is_dir()
+    finally:
+        first.release()
+
+
+def test_a_folder_of_other_files_is_refused_unless_forced(sweep):
+    Path("out").mkdir()
+    Path("out/results.csv").write_text("mine\n")
+    Path("out/notes.txt").write_text("mine\n")
+    result = invoke("batch", str(sweep), "-o", "out")
+    assert result.exit_code == 2 and "holds files sandmod batch did not write (notes.txt, results.csv)" in result.output
+    assert Path("out/results.csv").read_text() == "mine\n" and sorted(os.listdir("out")) == ["notes.txt", "results.csv"]
+    result = invoke("batch", str(sweep), "-o", "out", "--force")
+    assert result.exit_code == 0 and Path("out/notes.txt").read_text() == "mine\n", result.output
+    result = invoke("batch", str(sweep), "-o", "out", "--force")
+    assert result.exit_code == 2 and "holds the runs of an earlier batch: --resume" in result.output
+
+
+def test_tampered_run_folders_are_done_again_and_a_link_is_never_followed(sweep, tmp_path):
+    assert invoke("batch", str(sweep), "-o", "whole").exit_code == 0
+    shutil.copytree("whole", "out")
+    runs = sorted(p for p in Path("out/runs").iterdir())
+    (runs[0] / "last.png").unlink()
+    (runs[1] / "last.png").write_bytes(b"\x89PNG\r\n\x1a\n broken")
+    shutil.copy(runs[3] / "row.json", runs[2] / "row.json")
+    outside = tmp_path / "outside"
+    shutil.move(runs[4], outside)
+    os.symlink(outside, runs[4])
+    (runs[5] / "row.json").write_text("[1, 2]")
+    before = sorted((p.name, p.read_bytes()) for p in outside.iterdir())
+    result = invoke("batch", str(sweep), "-o", "out", "--resume")
+    assert result.exit_code == 0 and "(3 done before)" in result.output, result.output
+    assert table(Path("whole/results.csv")) == table(Path("out/results.csv"))
+    assert same_files(Path("whole/runs"), Path("out/runs")) and not runs[4].is_symlink()
+    assert sorted((p.name, p.read_bytes()) for p in outside.iterdir()) == before
+
+
+@pytest.mark.parametrize("signum, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_an_interrupted_batch_writes_the_table_of_its_runs_done_and_resumes(sweep, signum, status):
+    assert invoke("batch", str(sweep), "-o", "whole", "-j", "1").exit_code == 0
+    child = subprocess.Popen([sys.executable, "-m", "sandmod", "batch", str(sweep), "-o", "out", "-j", "2"],
+                             stderr=subprocess.PIPE, text=True, start_new_session=True)
+    runs = Path("out/runs")
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (runs.is_dir() and any(p.name[0] != "." for p in runs.iterdir())):
+        time.sleep(0.02)
+    os.killpg(child.pid, signum)  # as a terminal's Ctrl-C or a scheduler's SIGTERM reach the whole group
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == status and "Traceback" not in err and "--resume" in err, err
+    done = [p for p in runs.iterdir() if not p.name.startswith(".")]
+    rows = list(csv.DictReader(open("out/results.csv")))
+    assert 1 <= len(rows) == len(done) and {r["id"] for r in rows} == {p.name for p in done}
+    assert not list(runs.glob(".*"))
+    result = invoke("batch", str(sweep), "-o", "out", "--resume")
+    assert result.exit_code == 0 and table(Path("whole/results.csv")) == table(Path("out/results.csv"))
+
+
+@pytest.mark.parametrize("address", ["nonsense", "tcp://127.0.0.1:1"])
+def test_a_scheduler_that_does_not_answer_is_one_line(sweep, address):
+    pytest.importorskip("dask.distributed")
+    result = invoke("batch", str(sweep), "-o", "out", "--executor", "dask", "--scheduler", address)
+    assert result.exit_code == 2 and f"no Dask scheduler answers at {address!r}" in result.output
+    assert len(result.output.strip().splitlines()) == 1
+
+
+def test_the_contact_sheet_has_a_row_per_combination_and_shows_failures_and_huge_frames_bounded(sweep):
+    from PIL import Image
+
+    assert invoke("batch", str(sweep), "-o", "out").exit_code == 0
+    with Image.open("out/contact_sheet.png") as sheet:
+        assert sheet.height == 4 * (batching.sheet.TILE + 8 + 14)  # 2 frictions x 2 gravities, a row each
+    rows = list(csv.DictReader(open("out/results.csv")))
+    huge = Image.new("P", (12000, 12000))
+    huge.save(Path("out/runs") / rows[0]["id"] / "last.png", optimize=True)
+    sweep_runs = batching.read_sweep(sweep, Path("out")).runs
+    rows[1]["status"] = "failed"
+    path = batching.contact_sheet(rows, sweep_runs, Path("out"))
+    with Image.open(path) as sheet:
+        pixels = sheet.convert("RGB")
+        assert batching.sheet._FAILED in {colour for _, colour in pixels.getcolors(2**20)}
+
+
+def test_ctrl_c_while_a_command_loads_is_a_quiet_exit_130(tmp_path):
+    script = shutil.which("sandmod", path=str(Path(sys.executable).parent))
+    for delay in (0.05, 0.1, 0.2, 0.3):
+        child = subprocess.Popen([script, "validate", "nothing.toml"], cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        child.send_signal(signal.SIGINT)
+        _, err = child.communicate(timeout=60)
+        assert "Traceback" not in err and child.returncode in (130, 2), (delay, err)
