@@ -106,7 +106,8 @@ def test_the_contact_sheet_has_a_row_per_combination_and_shows_failures_and_huge
 
     assert invoke("batch", str(sweep), "-o", "out").exit_code == 0
     with Image.open("out/contact_sheet.png") as sheet:
-        assert sheet.height == 4 * (batching.sheet.TILE + 8 + 14)  # 2 frictions x 2 gravities, a row each
+        scale = batching.sheet.TILE // 48  # the 48x40 world, a whole number of pixels a cell
+        assert sheet.height == 4 * (40 * scale + batching.sheet.GAP + batching.sheet.LINE) + batching.sheet.GAP  # 2 frictions x 2 gravities
     rows = list(csv.DictReader(open("out/results.csv")))
     huge = Image.new("P", (12000, 12000))
     huge.save(Path("out/runs") / rows[0]["id"] / "last.png", optimize=True)

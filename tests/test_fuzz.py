@@ -8,6 +8,7 @@ derandomized, so CI runs the same cases in about a minute.
 from __future__ import annotations
 
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -158,3 +159,68 @@ def test_mutated_snapshots_load_cleanly(snapshot_bytes, data):
     _clean_exit(result)
     _finished_only("w.toml", "s.npz", "out.gif")
     Path("out.gif").unlink(missing_ok=True)
+
+
+SWEEP_WORLD = """
+[world]
+width = 24
+height = 20
+mods = ["sand"]
+
+[[scene]]
+shape = "rect"
+element = "stone"
+x = 0
+y = 17
+width = 24
+height = 3
+
+[[emitters]]
+shape = "rect"
+element = "sand"
+x = 10
+y = 0
+width = 4
+height = 1
+stop = 10
+
+[render]
+frames = 20
+"""
+SWEEP = """
+[sweep]
+worlds = ["*.toml"]
+seeds = [0, 1]
+frames = 12
+
+[parameters]
+"elements.sand.friction" = [0.3, 1.2]
+"world.gravity" = [1.0, 0.5]
+"render.scale" = [1, 2]
+
+[record]
+format = "gif"
+snapshots = [6]
+
+[metrics]
+frames = [6, 12]
+names = ["counts", "extent"]
+"""
+
+
+@SETTINGS
+@given(text=mutated(SWEEP))
+def test_mutated_sweeps_are_refused_before_any_run_or_run_whole(text):
+    shutil.rmtree("out", ignore_errors=True)
+    Path("worlds").mkdir(exist_ok=True)
+    Path("worlds/heap.toml").write_text(SWEEP_WORLD)
+    Path("worlds/sweep.toml").write_text(text, encoding="utf-8", errors="surrogatepass")
+    checked = invoke("validate", "worlds/sweep.toml")
+    _clean_exit(checked)
+    planned = invoke("batch", "worlds/sweep.toml", "--dry-run")
+    _clean_exit(planned)
+    assert (planned.exit_code == 0) == (checked.exit_code == 0), (checked.output, planned.output)
+    if planned.exit_code == 0 and int(planned.output.split()[-2]) <= 16:
+        result = invoke("batch", "worlds/sweep.toml", "-o", "out", "-j", "1", "-q")
+        assert result.exit_code == 0, result.output  # a sweep that passed its checks has no run fail
+    _finished_only("worlds", "out")

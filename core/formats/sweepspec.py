@@ -17,6 +17,9 @@ A sweep is one TOML file::
 
     [metrics]
     frames = [200, 400]                  # frames to measure at (default: the last)
+
+Every mistake, in the file or in what it names, is found by :func:`sandmod.jobs.batch.read_sweep`
+before any run.
 """
 
 from __future__ import annotations
@@ -63,7 +66,7 @@ class SweepInfo(_Strict):
 
     worlds: list[str] = Field(min_length=1, max_length=1000, description="World files, or globs of them, relative to the sweep file.")
     seeds: Annotated[list[Seed], Field(max_length=MAX_RUNS)] | SeedRange = Field(
-        default_factory=lambda: [0], description="Seeds to run each world with: a list, or { from = 0, to = 99 }."
+        default_factory=lambda: [0], description="Seeds to run each world with: a list (each seed once), or { from = 0, to = 99 }."
     )
     frames: int | None = Field(None, ge=1, le=100000, description="Frames each run simulates (default: each world's own).")
 
@@ -109,7 +112,8 @@ class SweepFile(_Strict):
     parameters: dict[str, list[Any]] = Field(
         default_factory=dict,
         description="A grid of values by dotted path: 'elements.NAME.FIELD' into the mods, 'world.FIELD' or 'render.FIELD' "
-        "into each world; every combination is a run.",
+        "into each world; every combination is a run. A path's values are all numbers, all text or all true/false, each "
+        "listed once, and each must take effect. At most 100,000 runs in one sweep (worlds x combinations x seeds).",
     )
     record: RecordSettings = Field(default_factory=RecordSettings, description="What each run records.")
     metrics: MetricSettings = Field(default_factory=MetricSettings, description="What each run measures.")

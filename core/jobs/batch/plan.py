@@ -132,7 +132,10 @@ def _worlds(spec: SweepFile, source: TomlSource, folder: Path) -> list[tuple[str
             inside(folder, pattern.replace("*", "x").replace("?", "x").replace("[", "x"), "world")  # no absolute path, no '..'
         except Refused as exc:
             raise ProblemsError([source.problem(where, str(exc))]) from None
-        matches = sorted(glob.glob(glob.escape(str(folder)) + "/" + pattern)) if any(c in pattern for c in "*?[") else [str(folder / pattern)]
+        pattern_like = any(c in pattern for c in "*?[")
+        matches = sorted(glob.glob(glob.escape(str(folder)) + "/" + pattern)) if pattern_like else [str(folder / pattern)]
+        if pattern_like:  # a glob's matches that are not worlds (the sweep itself, say) are not meant
+            matches = [m for m in matches if Path(m).is_file() and _is_world(Path(m))]
         if not matches or not all(Path(m).is_file() for m in matches):
             raise ProblemsError([source.problem(where, f"no world file {pattern!r} in {display_path(folder)}")])
         for match in matches:
@@ -143,6 +146,17 @@ def _worlds(spec: SweepFile, source: TomlSource, folder: Path) -> list[tuple[str
                 raise ProblemsError([source.problem(where, f"{name}: {exc}")]) from None
             found.setdefault(name, Path(match))
     return list(found.items())
+
+
+def _is_world(path: Path) -> bool:
+    """Whether ``path`` reads as TOML with a [world] table (a file that does not read is one: its
+    problems are then reported when it is loaded)."""
+    from ...rules.modset import is_world
+
+    try:
+        return is_world(TomlSource.read(path).data)
+    except ProblemsError:
+        return True
 
 
 class _WorldPlanner:
