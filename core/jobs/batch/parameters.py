@@ -31,8 +31,17 @@ def element_values(parameters: dict[str, Any]) -> dict[str, Any]:
 
 def load_run(world_path: str | Path, parameters: dict[str, Any], mod_dirs: Iterable[str], seed: int | None, max_memory: int | None = None):
     """The world file loaded with the parameters applied (a LoadedWorld)."""
+    from ...world.loading import load_world_spec
+
+    spec, source, rules = compile_run(world_path, parameters, mod_dirs)
+    return load_world_spec(spec, source, Path(world_path), seed=seed, rules=rules, max_memory=max_memory)
+
+
+def compile_run(world_path: str | Path, parameters: dict[str, Any], mod_dirs: Iterable[str]):
+    """(the world file's spec, its source, its WorldRules) with the parameters applied: what a run
+    loads, short of building the world."""
     from ...formats.worldspec import WorldFile
-    from ...world.loading import load_world_spec, world_rules
+    from ...world.loading import world_rules
 
     path = Path(world_path)
     source = world_source(TomlSource.read(path), parameters)
@@ -41,7 +50,7 @@ def load_run(world_path: str | Path, parameters: dict[str, Any], mod_dirs: Itera
     key = json.dumps([list(mod_dirs), spec.world.mods, values], default=str)
     if key not in _RULESETS:  # a process compiles each set of mods and values once
         _RULESETS[key] = world_rules(spec, source, path, mod_dirs=[Path(d) for d in mod_dirs], change=lambda mods: with_values(mods, values))
-    return load_world_spec(spec, source, path, seed=seed, rules=_RULESETS[key], max_memory=max_memory)
+    return spec, source, _RULESETS[key]
 
 
 def target(name: str) -> tuple[str, str, list[str]]:

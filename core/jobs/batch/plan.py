@@ -30,7 +30,7 @@ from ...formats.tomlsource import TomlSource
 from ...formats.userfiles import Refused, inside
 from ...formats.validation import validate
 from .metrics import BUILT_IN
-from .parameters import load_run, owner_of, target, with_values
+from .parameters import compile_run, load_run, owner_of, target, with_values
 from .run import Run, recording
 
 
@@ -62,7 +62,7 @@ def read_sweep(path: Path, out: Path, mod_dirs: Iterable[Path] = (), *, jobs: in
         raise ProblemsError(problems)
     sweep = Sweep(Path(path), spec)
     for number, (name, world_path) in enumerate(worlds):
-        planner = _WorldPlanner(spec, source, name, world_path, mod_dirs, Path(out).absolute())
+        planner = _WorldPlanner(spec, source, name, world_path, mod_dirs, Path(out).absolute(), max_memory)
         problems += planner.check()
         if not problems:
             sweep.runs += planner.runs(seeds)
@@ -162,10 +162,12 @@ def _is_world(path: Path) -> bool:
 class _WorldPlanner:
     """The runs of one world of a sweep, and what is wrong with them."""
 
-    def __init__(self, spec: SweepFile, source: TomlSource, name: str, path: Path, mod_dirs: Iterable[Path], out: Path) -> None:
+    def __init__(self, spec: SweepFile, source: TomlSource, name: str, path: Path, mod_dirs: Iterable[Path], out: Path,
+                 max_memory: int | None) -> None:
         from ...world.loading import mod_folders
 
         self.spec, self.source, self.name, self.path, self.out = spec, source, name, path, out
+        self.max_memory = max_memory
         self.mod_dirs = tuple(str(d) for d in mod_folders(mod_dirs, path))
         grid = sorted(spec.parameters.items())
         self.world_grid = [(k, v) for k, v in grid if not k.startswith("elements.")]
@@ -186,10 +188,10 @@ class _WorldPlanner:
 
     def _check_world(self, parameters: dict[str, Any]) -> list[Problem]:
         try:
-            loaded = load_run(self.path, parameters, self.mod_dirs, None, max_memory=None)
+            loaded = load_run(self.path, parameters, self.mod_dirs, None, max_memory=self.max_memory)
         except (ProblemsError, ValueError) as error:
             return self._blame(parameters, error)
-        self.world = loaded
+        self.mods, self.text = list(loaded.ruleset.mods), loaded.source.text  # not the world: one at a time in memory
         problems = self._typed(parameters, lambda name: _field(loaded.spec, name.split(".")))
         frames = self.spec.sweep.frames or loaded.spec.render.frames
         self.frames[_key(parameters)] = frames
@@ -243,7 +245,7 @@ class _WorldPlanner:
     def _check_elements(self) -> list[Problem]:
         """Each combination of each element's parameters against the element's model (a slow,
         whole-mod validation only to word a refusal), and each value that names something compiled."""
-        mods = list(self.world.ruleset.mods)
+        mods = self.mods
         problems, groups = [], {}
         for name, values in self.element_grid:
             mod = owner_of(name, mods)
@@ -254,7 +256,7 @@ class _WorldPlanner:
             groups.setdefault((mod.name, target(name)[1]), (mod, []))[1].append((name, values))
         for (mod_name, element), (mod, grid) in groups.items():
             problems += self._check_group(mod, element, grid)
-        if not problems:
+        if not problems and self.element_grid:
             problems += self._compile_named()
         return problems
 
@@ -298,7 +300,7 @@ class _WorldPlanner:
         tries = [first] + [{**first, name: value} for name, values in self.element_grid for value in values[1:] if isinstance(value, str)]
         for values in tries:
             try:
-                load_run(self.path, values, self.mod_dirs, None, max_memory=None)
+                compile_run(self.path, values, self.mod_dirs)
             except (ProblemsError, ValueError) as error:
                 return self._blame(values, error)
         return []
@@ -307,7 +309,7 @@ class _WorldPlanner:
         """Every run of this world: each combination of the parameters, with each seed."""
         grid = sorted(self.spec.parameters.items())
         record, metrics = self.spec.record.model_dump(), self.spec.metrics.model_dump()
-        fixed = json.dumps([self.name, hashlib.sha256(self.world.source.text.encode()).hexdigest(), _mods_fingerprint(self.world),
+        fixed = json.dumps([self.name, hashlib.sha256(self.text.encode()).hexdigest(), _mods_fingerprint(self.mods),
                             self.spec.record.model_dump_json(), self.spec.metrics.model_dump_json(), __version__])
         runs = []
         for combo in itertools.product(*(values for _, values in grid)):
@@ -336,9 +338,9 @@ def _field(model: Any, fields: list[str]) -> Any:
     return model
 
 
-def _mods_fingerprint(loaded) -> str:
-    """A hash of the text of every mod the world loaded."""
-    texts = sorted(m.source.text for m in loaded.ruleset.mods)
+def _mods_fingerprint(mods: list) -> str:
+    """A hash of the text of every mod a world loads."""
+    texts = sorted(m.source.text for m in mods)
     return hashlib.sha256("\0".join(texts).encode()).hexdigest()
 
 
