@@ -18,7 +18,7 @@ The public API is what this package gives (plugin authors: :mod:`sandmod.api`)::
     world = loaded.world
     world.paint_shape(shape="circle", element="water", x=50, y=20, radius=6)
     world.run(100)
-    world.counts()                 # {'sand:sand': 2400, 'water:water': 113, ...}
+    world.counts()                 # {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}
     world.temperature()            # degrees Celsius, (height, width)
     world.image()                  # palette indices; world.rgb() for colours
     world.save_snapshot("hourglass.npz")

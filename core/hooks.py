@@ -47,8 +47,8 @@ def register_mod_loaders(register: Callable[[str, ModLoader], None]) -> None:
     """Teach sandmod to read mod files of another format.
 
     ``register(suffix, load)``: ``suffix`` like ``".toml"``; ``load(path)``
-    returns a :class:`~sandmod.formats.tomlsource.TomlSource` (the parsed data and
-    the line of each key) or raises :class:`~sandmod.errors.ProblemsError`.
+    returns a :class:`sandmod.api.TomlSource` (the parsed data and the line
+    of each key) or raises :class:`sandmod.api.ProblemsError`.
     """
 
 
@@ -66,7 +66,7 @@ def register_mods(register: Callable[[Mapping[str, Any], str], None]) -> None:
 def register_recorders(register: Callable[["RecorderSpec"], None]) -> None:
     """Add output formats for ``sandmod render``.
 
-    ``register(spec)`` takes a :class:`~sandmod.formats.recording.RecorderSpec`:
+    ``register(spec)`` takes a :class:`sandmod.api.RecorderSpec`:
     a name, the file extensions it writes, and a function that opens a
     recorder on a path.
     """
@@ -81,7 +81,7 @@ def register_metrics(register: Callable[[str, Metric], None]) -> None:
     """Add metrics that ``sandmod batch`` takes of each run, at the sweep's ``[metrics] frames``.
 
     ``register(name, measure)``: ``measure(world)`` gets the
-    :class:`~sandmod.world.world.World` and returns a number, or a mapping of
+    world (a :class:`sandmod.World`) and returns a number, or a mapping of
     names to numbers; the results table gets a column ``name@FRAME`` (or
     ``name.key@FRAME``) for it. Example, the height of the tallest heap::
 

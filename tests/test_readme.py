@@ -53,10 +53,19 @@ def test_the_readme_commands_and_links_name_files_that_exist():
         assert (ROOT / path).exists(), path
 
 
-def test_the_readme_python_runs(monkeypatch):
+def test_the_readme_python_runs_and_prints_what_it_says(monkeypatch, capsys):
     code = next(b for b in re.findall(r"```python\n(.*?)```", README, re.S) if "import sandmod" in b)
     monkeypatch.chdir(ROOT)
     exec(compile(code, "README.md", "exec"), {})
+    said = re.search(r"print\(world.counts\(\)\)\s+# (.*)", code).group(1)
+    assert capsys.readouterr().out.strip() == said
+
+
+def test_the_package_docstring_shows_the_counts_its_example_gives():
+    import sandmod
+
+    said = re.search(r"world.counts\(\)\s+# (.*)", sandmod.__doc__).group(1)
+    assert said == next(b for b in re.findall(r"```python\n(.*?)```", README, re.S) if "import sandmod" in b).split("# ")[-1].strip()
 
 
 def test_the_readme_says_what_the_mistake_line_says(tmp_path):

@@ -546,7 +546,8 @@ def new_element(name, archetype, like, mod_file, folder, mod_dirs) -> None:
 @click.argument("name", callback=_name(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", "file name"))
 @click.option("--mod", "mods", multiple=True, help="A mod the world loads (repeatable; default: every mod found).")
 @click.option("--pour", help="The element its emitter pours (default: a powder or liquid of your own mods, else sand).")
-@click.option("--size", type=(click.IntRange(16, 4096), click.IntRange(16, 4096)), default=(160, 120), show_default=True)
+@click.option("--size", type=(click.IntRange(16, 4096), click.IntRange(16, 4096)), default=(160, 120), show_default=True,
+              metavar="W H", help="Width and height of the world, in cells (16 to 4096).")
 @_mods_option
 def new_world(name, mods, pour, size, mod_dirs) -> None:
     """Write NAME.toml: a world with a floor and an emitter, recording the mods and versions it is made with."""

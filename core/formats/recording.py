@@ -72,9 +72,11 @@ class SavedAtClose:
         raise NotImplementedError
 
     def add_frame(self, frame: np.ndarray) -> None:
+        """Keep the frame, as :meth:`convert` makes it."""
         self._images.append(self.convert(frame))
 
     def close(self) -> None:
+        """Save every frame kept, with :meth:`save`."""
         if not self._images:
             raise ValueError("no frames to write")
         first, *rest = self._images

@@ -183,6 +183,7 @@ class Ruleset:
 
     @property
     def shades(self) -> int:
+        """How many colours each element's cells pick from (a cell keeps its pick as it moves)."""
         return self.looks.shades
 
     def index(self, ref: str, within: str | None = None, near: Sequence[str] = ()) -> int:
@@ -683,6 +684,7 @@ class Looks:
 
     @property
     def shades(self) -> int:
+        """How many colours each element's cells pick from."""
         return self.normal.shape[1]
 
 

@@ -181,7 +181,7 @@ class _Builder:
             self.note(loc + ("at",), f"the centre lies outside the {self.world.width}x{self.world.height} world")
             return
         try:
-            self.world.scheduled.append((frame, self.world.blast_row(x, y, blast)))
+            self.world.scheduled.append((frame, self.world._blast_row(x, y, blast)))
         except KeyError as exc:
             self.note(loc + ("leaves",), exc.args[0])
 

@@ -278,11 +278,9 @@ class World:
     def paint_cells(
         self, ys: np.ndarray, xs: np.ndarray, element: int, *, chance: float = 1.0, only_empty: bool = False, salt: int = SALT_PAINT
     ) -> int:
-        """:meth:`paint` for cells given by their rows and columns.
-
-        In numpy, so that a world file's scene is built without numba (``sandmod validate``
-        builds it): the cells become the new element as :func:`sandmod.engine.cells.become`
-        makes them in the kernel (``tests/test_painting.py`` holds the two equal)."""
+        """:meth:`paint` for the cells at rows ``ys`` and columns ``xs``."""
+        # In numpy, so that a world file's scene is built without numba (validate builds it): the cells
+        # become the new element as engine.cells.become makes them in the kernel (tests/test_painting.py).
         if only_empty:
             keep = self.cells[ys, xs] == 0
             ys, xs = ys[keep], xs[keep]
@@ -416,13 +414,13 @@ class World:
         """The sum of every cell's heat energy (conduction keeps it; sources and cooling change it)."""
         return int(self.state.heat.sum(dtype=np.int64))
 
-    def blast_row(self, x: int, y: int, explosion: Explosion) -> np.ndarray:
+    def _blast_row(self, x: int, y: int, explosion: Explosion) -> np.ndarray:
         """An explosion centred on cell (x, y), as the kernel takes it (KeyError: unknown 'leaves')."""
         return blast_row(explosion, self.ruleset.index(explosion.leaves), x, y)
 
     def explode(self, x: int, y: int, explosion: Explosion) -> None:
         """Set off an explosion centred on cell (x, y) now."""
-        self._explode(self.blast_row(x, y, explosion)[None, :], 1)
+        self._explode(self._blast_row(x, y, explosion)[None, :], 1)
 
     def _explode(self, rows: np.ndarray, salt: int) -> None:
         key = frame_key(self.seed, self.frame, SALT_BLAST + salt)
@@ -539,7 +537,7 @@ class World:
 
     def heat_image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
         """Every cell's temperature as a colour, RGB (height, width, 3): blue cold, dark at 20 degrees,
-        then purple, red, orange, yellow and white (see :data:`sandmod.engine.pixels.HEAT_SCALE`).
+        then purple, red, orange, yellow and white, the scale of ``sandmod play``'s heat view.
         ``changed_only`` as for :meth:`image`, whose record of changes it shares."""
         from ..engine import pixels
 
@@ -572,7 +570,7 @@ class World:
         return paint_shape(self, {**(table or {}), **fields})
 
     def save_snapshot(self, path: str | Path) -> None:
-        """Write the whole state to an ``.npz`` file (atomically); see :mod:`sandmod.world.snapshots`."""
+        """Write the whole state to an ``.npz`` file (atomically): :meth:`load_snapshot` goes on from it bit for bit."""
         from .snapshots import save_snapshot
 
         save_snapshot(self, Path(path))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import re
 
 import pytest
 import reference
@@ -66,11 +67,23 @@ def test_the_cli_reference_has_every_command_and_option():
                 assert shown in text, f"{name} {shown}"
 
 
-def test_the_api_reference_has_every_public_name_and_worlds_methods():
+def _entries(text: str) -> dict[str, str]:
+    """Each heading's name and the text under it, to the next heading."""
+    parts = re.split(r"^#{3,4} `([^`]+)`\n", text, flags=re.M)
+    return dict(zip(parts[1::2], parts[2::2]))
+
+
+def test_the_api_reference_has_an_entry_with_text_for_every_public_name_method_and_hook():
+    entries = _entries(reference.api_reference())
+    wanted = [f"sandmod.{name}" for name in sandmod.__all__ if name != "__version__"] + [f"sandmod.api.{name}" for name in api.__all__]
+    wanted += reference.hook_names() + [f"sandmod.World.{m}" for m in ("step", "run", "paint_shape", "counts", "temperature", "image", "save_snapshot", "load_snapshot")]
+    assert len(reference.hook_names()) == 5
+    assert [name for name in wanted if name not in entries] == []
+    assert [name for name, body in entries.items() if not re.sub(r"```python\n.*?```", "", body, flags=re.S).strip()] == []
+
+
+def test_the_api_reference_shows_nothing_private_or_internal():
     text = reference.api_reference()
-    for name in sandmod.__all__[1:]:
-        assert f"sandmod.{name}" in text
-    for name in api.__all__:
-        assert f"sandmod.api.{name}" in text
-    for method in ("step", "run", "paint_shape", "counts", "temperature", "image", "save_snapshot", "load_snapshot"):
-        assert f"`sandmod.World.{method}(" in text
+    assert [name for name in _entries(text) if "._" in name or name.startswith("_")] == []
+    for internal in ("salt", "sandmod.engine", "sandmod.formats", "sandmod.world.", "sandmod.errors", "tests/", "<factory>", "_F"):
+        assert internal not in text, internal

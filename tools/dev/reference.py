@@ -86,6 +86,17 @@ def _allowed(field: FieldInfo) -> str:
     return ", ".join(parts)
 
 
+def _item_allowed(annotation) -> str:
+    """The bounds on each value of a list field."""
+    if typing.get_origin(annotation) is Annotated:
+        annotation = typing.get_args(annotation)[0]
+    item = typing.get_args(annotation)[0] if typing.get_origin(annotation) is list else None
+    if typing.get_origin(item) is not Annotated:
+        return ""
+    rules = [rule for extra in typing.get_args(item)[1:] for rule in getattr(extra, "metadata", [extra])]
+    return _allowed(types.SimpleNamespace(metadata=rules)) if rules else ""
+
+
 def _default(field: FieldInfo) -> str:
     if field.is_required():
         return "required"
@@ -99,10 +110,24 @@ def _default(field: FieldInfo) -> str:
     return f"`{value!r}`".replace("'", '"')
 
 
+def _written_type(field: FieldInfo) -> str:
+    """The field's type as a file may write it: a list that a single value stands for (a colour,
+    a speed) says so."""
+    text = _type_text(field.annotation)
+    single = {"_as_list": "{item}, or a list of them", "_as_range": "{item}, or a list of two: [lowest, highest]"}
+    for rule in field.metadata:
+        form = single.get(getattr(getattr(rule, "func", None), "__name__", ""))
+        if form and text.startswith("list of "):
+            return form.format(item=text.removeprefix("list of "))
+    return text
+
+
 def _row(name: str, field: FieldInfo) -> str:
     description = " ".join((field.description or "").split()).replace("|", "\\|")
     allowed = _allowed(field).replace("|", "\\|")
-    return f"| `{name}` | {_type_text(field.annotation)} | {_default(field)} | {allowed} | {description} |"
+    if ", or a list of two" in _written_type(field):  # its length is not the user's to choose: show each value's bounds
+        allowed = _item_allowed(field.annotation)
+    return f"| `{name}` | {_written_type(field)} | {_default(field)} | {allowed} | {description} |"
 
 
 def _table(fields: dict[str, FieldInfo]) -> list[str]:
@@ -146,6 +171,7 @@ def _same(a: FieldInfo | None, b: FieldInfo) -> bool:
 def _markdown(docstring: str | None, whole: bool = False) -> str:
     """A docstring (its first paragraph unless ``whole``), its reStructuredText literals as Markdown's."""
     text = (docstring or "") if whole else (docstring or "").split("\n\n")[0]
+    text = re.sub(r"(?:^|\n\n)::\n\n", "\n\nFor example::\n\n", text).lstrip("\n")  # a literal block with no sentence before it
     text = re.sub(r"::\n\n((?:    .*\n?|\n)+)", lambda m: ":\n\n```\n" + textwrap.dedent(m.group(1)).strip("\n") + "\n```\n", text)
     return re.sub(r"``(.+?)``", r"`\1`", re.sub(r":\w+:`~?([^`]+)`", r"`\1`", text))
 
@@ -202,11 +228,23 @@ def file_reference(kind: str) -> str:
 # --- the command line -------------------------------------------------------------------------
 
 
+def _param_type(kind: click.ParamType) -> str:
+    """An option's type in words: a range with its bounds, a pair as its two parts."""
+    if isinstance(kind, click.Tuple):
+        return " and ".join(_param_type(part) for part in kind.types)
+    if isinstance(kind, (click.IntRange, click.FloatRange)):
+        word = "integer" if isinstance(kind, click.IntRange) else "number"
+        low = "" if kind.min is None else f"{kind.min} {'<' if kind.min_open else '≤'} "
+        high = "" if kind.max is None else f" {'<' if kind.max_open else '≤'} {kind.max}"
+        return f"{word}, {low}N{high}" if low or high else word
+    return kind.name
+
+
 def _option_row(param: click.Parameter) -> str:
     if isinstance(param, click.Argument):
         return f"| `{param.human_readable_name}` | argument{'' if param.required else ', optional'} | |"
     names = ", ".join(f"`{o}`" for o in param.opts + param.secondary_opts)
-    kind = "flag" if getattr(param, "is_flag", False) else param.type.name.replace("|", "\\|")
+    kind = "flag" if getattr(param, "is_flag", False) else _param_type(param.type).replace("|", "\\|")
     if param.multiple:
         kind += ", repeatable"
     help_text = " ".join((param.help or "").split()).replace("|", "\\|")
@@ -252,31 +290,74 @@ def cli_reference() -> str:
 # --- the Python API ---------------------------------------------------------------------------
 
 
-def _documented(name: str, thing: Any, level: str = "###") -> list[str]:
+#: Parameters that are the engine's business, not the caller's: left out.
+_INTERNAL_PARAMETERS = ("salt",)
+#: Classes sandmod makes (load_world, load_ruleset), never the caller: no constructor shown.
+_MADE_BY_SANDMOD = ("LoadedWorld", "Ruleset")
+
+
+def _signature(thing: Any) -> str:
+    """``(arguments) -> result`` as a caller writes them: no ``self``, no private or internal
+    parameters, annotations unquoted. Empty for what is not called (a type alias, a protocol)."""
+    if not (inspect.isfunction(thing) or inspect.isclass(thing)):
+        return ""  # a marker used as @hookimpl, an alias of a type
+    if inspect.isclass(thing) and (getattr(thing, "_is_protocol", False) or thing.__name__ in _MADE_BY_SANDMOD):
+        return ""
     try:
-        signature = inspect.signature(thing) if callable(thing) else None
+        signature = inspect.signature(thing)
     except (TypeError, ValueError):
-        signature = None
-    if signature is not None and next(iter(signature.parameters), None) == "self":
-        signature = signature.replace(parameters=list(signature.parameters.values())[1:])
-    signature = str(signature).replace("'", "") if signature is not None else ""
-    kind = "class " if inspect.isclass(thing) else ""
-    out = [f"{level} `{kind}{name}{signature}`", "", _markdown(inspect.getdoc(thing), whole=True).strip(), ""]
+        return ""
+    parameters = [p for name, p in signature.parameters.items() if name != "self" and not name.startswith("_") and name not in _INTERNAL_PARAMETERS]
+    text = str(signature.replace(parameters=parameters)).replace("<factory>", "...").replace('"', "")
+    return re.sub(r"(?<!= )'([A-Za-z_][^']*)'", r"\1", text)  # quoted annotations, not string defaults
+
+
+def _attribute_doc(module: types.ModuleType, name: str) -> str:
+    """The ``#:`` comment above ``name = ...`` in ``module``'s source (an alias or a marker)."""
+    lines = inspect.getsource(module).splitlines()
+    for number, line in enumerate(lines):
+        if re.match(rf"{name}\s*(:[^=]*)?=", line):
+            comments = []
+            for above in reversed(lines[:number]):
+                if not above.startswith("#:"):
+                    break
+                comments.insert(0, above[2:].strip())
+            return " ".join(comments)
+    return ""
+
+
+def _entry(title: str, thing: Any, text: str, level: str = "###") -> list[str]:
+    """A heading with the name alone, the signature as code below it, then the text."""
+    signature = _signature(thing)
+    out = [f"{level} `{title}`", ""]
+    if signature:
+        kind = "class " if inspect.isclass(thing) else ""
+        out += ["```python", f"{kind}{title.rsplit('.', 1)[-1]}{signature}", "```", ""]
+    return out + [text.strip(), ""]
+
+
+def _documented(name: str, thing: Any, module: types.ModuleType | None = None) -> list[str]:
+    """The entry of a public name, and of a class's public methods and properties."""
+    own = getattr(thing, "__module__", "").startswith("sandmod") or inspect.isclass(thing)
+    text = _markdown(inspect.getdoc(thing), whole=True) if own and inspect.getdoc(thing) else ""
+    if not text and module is not None:
+        text = _attribute_doc(module, name.rsplit(".", 1)[-1])
+    out = _entry(name, thing, text)
     if inspect.isclass(thing) and thing.__module__.startswith("sandmod"):
         for member, value in vars(thing).items():
-            if member.startswith("_") and member != "_repr_png_":
+            if member.startswith("_"):
                 continue
             if isinstance(value, property):
                 out += [f"#### `{name}.{member}`", "", _markdown(inspect.getdoc(value), whole=True), ""]
             elif inspect.isfunction(value):
-                out += _documented(f"{name}.{member}", value, "####")
+                out += _entry(f"{name}.{member}", value, _markdown(inspect.getdoc(value), whole=True), "####")
     return out
 
 
 def api_reference() -> str:
-    """What ``import sandmod`` gives, and what plugin authors import from ``sandmod.api``."""
+    """What ``import sandmod`` gives, what plugin authors import from ``sandmod.api``, and the hooks."""
     import sandmod
-    from sandmod import api
+    from sandmod import api, hooks
 
     out = ["## `import sandmod`", ""]
     for name in sandmod.__all__:
@@ -284,8 +365,18 @@ def api_reference() -> str:
             out += _documented(f"sandmod.{name}", getattr(sandmod, name))
     out += ["## `sandmod.api`, for plugin authors", "", _markdown(inspect.getdoc(api), whole=True), ""]
     for name in api.__all__:
-        out += _documented(f"sandmod.api.{name}", getattr(api, name))
+        out += _documented(f"sandmod.api.{name}", getattr(api, name), hooks)
+    out += ["## Hooks", "", _markdown(inspect.getdoc(hooks), whole=True), ""]
+    for name in hook_names():
+        out += _entry(name, getattr(hooks, name), _markdown(inspect.getdoc(getattr(hooks, name)), whole=True))
     return "\n".join(out)
+
+
+def hook_names() -> list[str]:
+    """The hooks sandmod calls, in the order its module defines them."""
+    from sandmod import hooks
+
+    return [name for name, value in vars(hooks).items() if callable(value) and hasattr(value, "sandmod_spec")]
 
 
 def changelog() -> str:
