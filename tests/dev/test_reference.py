@@ -87,3 +87,12 @@ def test_the_api_reference_shows_nothing_private_or_internal():
     assert [name for name in _entries(text) if "._" in name or name.startswith("_")] == []
     for internal in ("salt", "sandmod.engine", "sandmod.formats", "sandmod.world.", "sandmod.errors", "tests/", "<factory>", "_F"):
         assert internal not in text, internal
+
+
+def test_the_gallery_has_a_page_for_every_example_world_and_the_site_lists_them():
+    nav = (reference.ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    names = reference.example_worlds()
+    assert len(names) >= 10 and "seeds" not in names  # a sweep is not a world
+    for name in names:
+        assert f"docs/gallery/{name}.md" in reference.PAGES and f"gallery/{name}.md" in nav
+        assert reference._render_command(name), f"no page says how docs/images/{name}.webp is made"

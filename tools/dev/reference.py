@@ -379,6 +379,67 @@ def hook_names() -> list[str]:
     return [name for name, value in vars(hooks).items() if callable(value) and hasattr(value, "sandmod_spec")]
 
 
+# --- the gallery --------------------------------------------------------------------------------
+
+
+def example_worlds() -> list[str]:
+    """The names of the example worlds (not the sweeps), in order."""
+    return sorted(p.stem for p in (ROOT / "examples").glob("*.toml") if "[world]" in p.read_text(encoding="utf-8"))
+
+
+def _render_command(name: str) -> str | None:
+    """The command that made docs/images/NAME.webp, as the page that shows it says (said once, there)."""
+    pattern = rf"sandmod render examples/{name}\.toml[^`\n]*-o docs/images/{name}\.webp"
+    for page in sorted((ROOT / "docs").rglob("*.md")):
+        if "gallery" not in page.parts:
+            found = re.search(pattern, page.read_text(encoding="utf-8"))
+            if found:
+                return found.group(0)
+    return None
+
+
+def _comment_markdown(text: str) -> list[str]:
+    """A file's opening comment as Markdown: its sentences as one paragraph, and lines that begin
+    with a frame number (a timeline's "  90  a burst ...") as a list."""
+    paragraph: list[str] = []
+    items: list[str] = []
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        words = line[1:].strip()
+        at = re.match(r"(\d+)\s{2,}(.*)", words)
+        if at:
+            items.append(f"- frame {at.group(1)}: {at.group(2)}")
+        elif items and words:
+            items[-1] += " " + words
+        else:
+            paragraph.append(words)
+    for number, item in enumerate(items):  # "230 a blast ...; 300  the left wall ..." on one line: two items
+        items[number] = re.sub(r";\s+(\d+)\s{2,}", r"\n- frame \1: ", item)
+    return [" ".join(" ".join(paragraph).split())] + ([""] + items if items else [])
+
+
+def gallery_page(name: str) -> str:
+    """An example world: what its opening comment says, its animation, and its file."""
+    text = (ROOT / "examples" / f"{name}.toml").read_text(encoding="utf-8")
+    out = _comment_markdown(text) + [""]
+    command = _render_command(name)
+    if command:
+        out += [f"![{name}](../images/{name}.webp)", "", f"*`{command}`*", ""]
+    out += ["Render it yourself (from a checkout; `sandmod play` opens it in a window):", "", "```bash",
+            f"sandmod render examples/{name}.toml", "```", "", f'```toml title="examples/{name}.toml"', text.rstrip("\n"), "```"]
+    return "\n".join(out)
+
+
+def gallery_index() -> str:
+    """Every example world: its name, its first sentence, a link to its page."""
+    rows = ["| world | what it shows |", "|---|---|"]
+    for name in example_worlds():
+        about = _comment_markdown((ROOT / "examples" / f"{name}.toml").read_text(encoding="utf-8"))[0]
+        rows.append(f"| [{name.replace('_', ' ')}]({name}.md) | {about} |")
+    return "\n".join(rows)
+
+
 def changelog() -> str:
     """The repository's CHANGELOG.md, so that it is written once."""
     return (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
@@ -386,6 +447,8 @@ def changelog() -> str:
 
 #: Each generated page, and what goes below its marker.
 PAGES = {
+    "docs/gallery/index.md": gallery_index,
+    **{f"docs/gallery/{name}.md": (lambda name=name: gallery_page(name)) for name in example_worlds()},
     "docs/reference/mod-files.md": lambda: file_reference("mod"),
     "docs/reference/world-files.md": lambda: file_reference("world"),
     "docs/reference/sweep-files.md": lambda: file_reference("sweep"),
@@ -397,17 +460,26 @@ PAGES = {
 
 def page_text(page: str) -> str:
     """A page as it should be: its own text down to the marker, then what the code says."""
-    current = (ROOT / page).read_text(encoding="utf-8")
+    path = ROOT / page
+    current = path.read_text(encoding="utf-8") if path.exists() else f"# {_title(page)}\n"
     head = current.split(MARKER)[0].rstrip("\n")
     return (head + "\n\n" if head else "") + MARKER + "\n\n" + PAGES[page]().strip("\n") + "\n"
+
+
+def _title(page: str) -> str:
+    """A new page's title: a gallery world's name in words."""
+    name = Path(page).stem
+    return "Gallery" if name == "index" else name.replace("_", " ").capitalize()
 
 
 def main() -> int:
     """Write every generated page anew; print those that changed."""
     for page in PAGES:
         text = page_text(page)
-        if text != (ROOT / page).read_text(encoding="utf-8"):
-            (ROOT / page).write_text(text, encoding="utf-8")
+        path = ROOT / page
+        if not path.exists() or text != path.read_text(encoding="utf-8"):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8")
             print(f"wrote {page}")
     return 0
 
