@@ -176,6 +176,45 @@ def _markdown(docstring: str | None, whole: bool = False) -> str:
     return re.sub(r"``(.+?)``", r"`\1`", re.sub(r":\w+:`~?([^`]+)`", r"`\1`", text))
 
 
+def _shape_models() -> list[type[BaseModel]]:
+    """The shapes a world file's tables are drawn in: each one's own fields, listed once."""
+    from sandmod.formats import worldspec
+
+    return [worldspec.RectArea, worldspec.CircleArea, worldspec.LineArea, worldspec.StrokeArea, worldspec.FillArea, worldspec.Picture]
+
+
+def _shape_of(model: type[BaseModel]) -> type[BaseModel] | None:
+    """The shape a model is drawn in (its shape base), or None."""
+    return next((shape for shape in _shape_models() if issubclass(model, shape)), None) if model.__module__.endswith("worldspec") else None
+
+
+def _shape_value(shape: type[BaseModel]) -> str:
+    return typing.get_args(shape.model_fields["shape"].annotation)[0]
+
+
+def _shaped(title: str, models: list[type[BaseModel]]) -> list[str]:
+    """A table drawn in one of several shapes: which shapes, and the fields it adds to each."""
+    shapes = [_shape_of(m) for m in models]
+    kinds = ", ".join(f'[`"{_shape_value(s)}"`](#shape-{_shape_value(s)})' for s in shapes)
+    added = {n: f for m, shape in zip(models, shapes) for n, f in m.model_fields.items() if n not in shape.model_fields}
+    out = [f"A shape: `shape` is one of {kinds}, with that shape's fields (see [shapes](#shapes)).", ""]
+    if added:
+        lacking = [f'`"{_shape_value(shape)}"`' for m, shape in zip(models, shapes) if any(n not in m.model_fields for n in added)]
+        out += ["And" + (f" (except {', '.join(lacking)})" if lacking else "") + ":", ""] + _table(added) + [""]
+    return out
+
+
+def _shapes_section() -> list[str]:
+    """Every shape's own fields, once."""
+    out = ["## Shapes", "", "The tables drawn in a shape (`[[scene]]`, `[[emitters]]`, a timeline's `paint`, `erase`,",
+           "`heat` and `launch`) take one of these, by its `shape`, and add their own fields.", ""]
+    for shape in _shape_models():
+        value = _shape_value(shape)
+        out += [f'### shape = "{value}" {{#shape-{value}}}', "", _markdown(inspect.getdoc(shape)), ""]
+        out += _table({n: f for n, f in shape.model_fields.items() if n != "shape"}) + [""]
+    return out
+
+
 def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]:
     """A section for the table at ``title``: one model, or the variants of a union (fields common to
     all of them listed once), then a section for each table nested in them."""
@@ -184,6 +223,8 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
         out += [_markdown(inspect.getdoc(models[0])), ""]
     if len(models) == 1:
         out += _table(models[0].model_fields) + [""]
+    elif _shape_of(models[0]) is not None and all(_shape_of(m) is not None for m in models):
+        out += _shaped(title, models)
     else:
         key = _discriminator(models)
         common = {
@@ -195,7 +236,7 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
             out += [f"Every kind of `{title}` takes:", ""] + _table(common) + [""]
         for model in models:
             value = typing.get_args(model.model_fields[key].annotation)[0]
-            own = {n: f for n, f in model.model_fields.items() if n not in common}
+            own = {n: f for n, f in model.model_fields.items() if n not in common and n != key}  # the heading says its kind
             out += [f"#### {key} = \"{value}\"", ""]
             if inspect.getdoc(model):
                 out += [_markdown(inspect.getdoc(model)), ""]
@@ -222,6 +263,8 @@ def file_reference(kind: str) -> str:
         key, models = _key_of(field.alias or name, field.annotation), _models_in(field.annotation)
         if models:  # a table of its own (a plain value is in the table above)
             out += _sections(key, models, seen)
+    if kind == "world":
+        out += _shapes_section()
     return "\n".join(out)
 
 
