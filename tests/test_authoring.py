@@ -166,3 +166,43 @@ def test_worlds_record_their_mods_and_warn_when_they_differ(tmp_path, monkeypatc
         "warning: w.toml:11:1: world.made_with.sand: made with mod sand 1.0.0; loading sand 1.1.0",
         "warning: w.toml:9:1: world.made_with: mod glass 1.0.0 is loaded but the world was not made with it",
     ]
+
+
+GOO = """[mod]
+name = "goo"
+version = "1.0.0"
+
+[elements.goo]
+archetype = "liquid"
+density = -1
+dispersion = 99
+color = "red"
+
+[[reactions]]
+a = "goo"
+b = "goo"
+a_becomes = "empty"
+chance = 5
+
+[[reactions]]
+a = "goo"
+b = "water"
+a_becomes = "goo"
+chance = 0.5
+"""
+
+
+def test_validate_reports_what_field_mistakes_would_hide_in_the_same_pass(tmp_path, monkeypatch):
+    write_mods(tmp_path / "mods", {"goo.toml": GOO})
+    monkeypatch.chdir(tmp_path)
+    first = invoke("validate").stderr.splitlines()
+    assert first == [
+        "mods/goo.toml:7:1: elements.goo.density: must be > 0 (got -1)",
+        "mods/goo.toml:8:1: elements.goo.dispersion: must be <= 16 (got 99)",
+        "mods/goo.toml:9:1: elements.goo.color: must be a colour like '#c2b280' (got 'red')",
+        "mods/goo.toml:15:1: reactions.0.chance: must be <= 1 (got 5)",
+        "mods/goo.toml:19:1: reactions.1.b: 'water:water' is from mod 'water'; add 'water' to mod.requires",
+    ]
+    fixed = GOO.replace("-1", "900").replace("99", "3").replace('"red"', '"#44aa33"').replace("chance = 5", "chance = 0.5")
+    write_mods(tmp_path / "mods", {"goo.toml": fixed})
+    assert invoke("validate").stderr.splitlines() == first[-1:]  # nothing new once the fields are right

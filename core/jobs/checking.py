@@ -1,8 +1,9 @@
 """``sandmod validate``: every problem in every mod, test and world file, in one pass.
 
-Files that fail their schema are reported and left out; the rest are still
-compiled (element references, reaction conflicts, reactions that never
-settle), their tests' element names resolved, and the world files loaded.
+Files that fail their schema are reported, and compiled with their broken
+elements stood in for, so that what the mistakes would hide is reported too;
+the rest are compiled (element references, reaction conflicts, reactions that
+never settle), their tests' element names resolved, and the world files loaded.
 """
 
 from __future__ import annotations
@@ -27,6 +28,29 @@ class Report:
     worlds: int = 0
     problems: list[Problem] = field(default_factory=list)
     warnings: list[Problem] = field(default_factory=list)
+
+
+def _behind_mistakes(modset) -> list[Problem]:
+    """The problems a mod's field mistakes would hide until they are fixed (a reaction naming an
+    element of a mod it does not require, say): each such mod compiled with the others, its broken
+    parts stood in for (:func:`~sandmod.rules.modset.salvage`); the problems in its other parts."""
+    from dataclasses import replace
+
+    from ..rules.compiler import compile_mods
+    from ..rules.modset import ModSet
+
+    found: list[Problem] = []
+    for salvaged in modset.salvaged:
+        mod = salvaged.mod
+        try:
+            compile_mods(ModSet({**modset.mods, mod.name: mod}).select(None))
+        except ProblemsError as exc:
+            found += [
+                replace(p, path=salvaged.path_in_file(p.path))
+                for p in exc.problems
+                if p.file == mod.source.name and not any(p.path.startswith(f"elements.{name}") for name in salvaged.stood_in)
+            ]
+    return found
 
 
 def check(
@@ -57,6 +81,7 @@ def check(
         except ProblemsError as more:
             report.problems.extend(more.problems)
             ruleset = None
+    report.problems += _behind_mistakes(modset)
     if ruleset is not None:
         report.mods, report.elements, report.reactions = len(ruleset.mods), len(ruleset.elements), len(ruleset.reactions)
         runner = TestRunner(modset)

@@ -9,6 +9,7 @@ lists every problem in every file.
 from __future__ import annotations
 
 import contextlib
+import copy
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +52,7 @@ class ModSet:
 
     mods: dict[str, LoadedMod]
     broken: frozenset[str] = frozenset()  # names of mods that were found but have mistakes
+    salvaged: tuple["Salvaged", ...] = ()  # those, their broken parts stood in for (see salvage): for checking only
 
     def usable(self) -> list[str]:
         """The mods whose requirements, all the way down, were found without mistakes."""
@@ -161,6 +163,8 @@ def discover_mods(
     broken: set[str] = set()
     headers: list[tuple[ModInfo, TomlSource]] = []  # of mods with mistakes elsewhere: their requires are checked too
 
+    salvaged: list[Salvaged] = []
+
     def add(source: TomlSource, plugin: str) -> None:
         try:
             loaded.append(LoadedMod(validate(ModFile, source), source, plugin))
@@ -171,6 +175,9 @@ def discover_mods(
                 broken.add(info["name"])
                 with contextlib.suppress(ValidationError):
                     headers.append((ModInfo.model_validate(info), source))
+                whole = salvage(source, plugin)
+                if whole is not None:
+                    salvaged.append(whole)
 
     folders = [(entry.value, entry.plugin) for entry in registry.mod_dirs]
     for folder in extra_dirs:
@@ -216,4 +223,62 @@ def discover_mods(
     broken -= set(by_name)
     for info, source in headers:
         problems += requirement_problems(info, source, by_name, broken)
-    return ModSet(by_name, frozenset(broken)), problems
+    return ModSet(by_name, frozenset(broken), tuple(m for m in salvaged if m.mod.name in broken)), problems
+
+
+#: What stands in for an element with mistakes while the rest of its mod is checked.
+STAND_IN = {"archetype": "static", "color": "#000000", "description": "stands in for an element with mistakes"}
+
+
+@dataclass(frozen=True)
+class Salvaged:
+    """A mod with mistakes made whole by :func:`salvage`, and where its kept reactions and tests were."""
+
+    mod: LoadedMod
+    stood_in: tuple[str, ...]  # the elements stood in for
+    was: dict[tuple[str, int], int]  # (table, index now) -> index in the file
+
+    def path_in_file(self, path: str) -> str:
+        """A problem's field path as the file numbers its reactions and tests."""
+        table, _, rest = path.partition(".")
+        number, dot, tail = rest.partition(".")
+        if number.isdigit() and (table, int(number)) in self.was:
+            return f"{table}.{self.was[(table, int(number))]}{dot}{tail}"
+        return path
+
+
+def salvage(source: TomlSource, plugin: str) -> Salvaged | None:
+    """A mod with mistakes, for checking what they do not hide (a reaction naming another mod's
+    element, say): each element with a mistake replaced by a stand-in of the same name, each
+    reaction or test with one left out. None when its header has a mistake too."""
+    data = source.data
+    try:
+        ModFile.model_validate(data)
+        return None
+    except ValidationError as exc:
+        errors = [tuple(e["loc"]) for e in exc.errors()]
+    data = copy.deepcopy(data)
+    dropped: dict[str, set[int]] = {"reactions": set(), "tests": set()}
+    stood_in: set[str] = set()
+    for loc in errors:
+        if len(loc) > 1 and loc[0] == "elements" and isinstance(loc[1], str) and isinstance(data.get("elements"), dict):
+            data["elements"][loc[1]] = dict(STAND_IN)
+            stood_in.add(loc[1])
+        elif len(loc) > 1 and loc[0] in dropped and isinstance(loc[1], int):
+            dropped[loc[0]].add(loc[1])
+        else:
+            return None  # the header, or the shape of the file itself
+    positions, was = dict(source.positions), {}
+    for table, numbers in dropped.items():
+        if isinstance(data.get(table), list) and numbers:
+            kept = [number for number in range(len(data[table])) if number not in numbers]
+            data[table] = [data[table][number] for number in kept]
+            was.update({(table, new): old for new, old in enumerate(kept)})
+            positions = {k: v for k, v in positions.items() if not (len(k) > 1 and k[0] == table)}
+            positions.update({(table, new, *k[2:]): v for new, old in enumerate(kept) for k, v in source.positions.items() if k[:2] == (table, old)})
+    try:
+        spec = ModFile.model_validate(data)
+    except ValidationError:
+        return None
+    mod = LoadedMod(spec, TomlSource(source.name, source.text, data, positions, source.path, source.folder), plugin)
+    return Salvaged(mod, tuple(sorted(stood_in)), was)
