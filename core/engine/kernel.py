@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from .blasts import explode, take_detonations  # noqa: F401  (the kernel's whole interface is here)
-from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _enterable, _mix32, _plume_roll, _within
+from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _enterable, _inside, _mix32, _plume_roll, _within
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
 from .heat import conduct
@@ -89,14 +89,31 @@ def _box_with(box, x0, x1, y0, y1):
 
 
 @inlined
+def _boxed_in(cells, displace, e, x, y, ty):
+    """Is a grain of element e at (x, y) shut in: does each of the cells its moves start with (below,
+    diagonally below and beside it, ``ty`` the row below) lie outside the world or hold an element
+    it cannot enter? Then no roll can move it."""
+    height, width = cells.shape
+    for k in range(5):
+        nx = x + (0, -1, 1, -1, 1)[k]
+        ny = ty if k < 3 else y
+        if _inside(nx, ny, width, height):
+            o = cells[_at(ny, nx)]
+            if o == 0 or displace[e, o] != 0:
+                return False
+    return True
+
+
+@inlined
 def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key, ambient, y1, busy_box, stir_box):
     """The fast loop: the cells of row y's segment sx0..sx1-1 from its ``n``-th on (in the row's
     direction) that need little, in a loop that holds few values (registers, not the stack): cells
     at rest that nothing around them can move (a resting fluid that nothing it could displace is
-    next to, a resting grain, a static cell), and a straight sink into a fluid by a grain at rest,
-    with the run behind it (:func:`~.moves.sink_run`). Stops at the first cell that needs more. Returns how far it got (the segment's length
-    when done), that cell and its element, whether only its move is left to decide (``ready``),
-    and the boxes of the cells it changed and stirred."""
+    next to, a resting grain, a static cell), a loose grain shut in where it is (it comes to rest,
+    see :func:`_boxed_in`), and a straight sink into a fluid by a grain at rest, with the run
+    behind it (:func:`~.moves.sink_run`). Stops at the first cell that needs more. Returns how far
+    it got (the segment's length when done), that cell and its element, whether only its move is
+    left to decide (``ready``), and the boxes of the cells it changed and stirred."""
     cells, flags, heat, vx, vy = s.cells, s.flags, s.heat, s.vx, s.vy
     height, width = cells.shape
     count = sx1 - sx0
@@ -110,14 +127,17 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key,
         if e == 0 or (f & MOVED) != 0:
             n += 1
             continue
-        ready = False  # moving, or not calm, or a lifetime, or a partner near: the full update
-        if vx[_at(y, x)] != 0 or vy[_at(y, x)] != 0 or (f & BURNING) != 0 or t.life_frames[e] != 0 or (t.reactive[e] & present) != 0:
+        ready = False  # falling, or not calm, or a lifetime, or a partner near: the full update
+        if vy[_at(y, x)] != 0 or (f & BURNING) != 0 or t.life_frames[e] != 0 or (t.reactive[e] & present) != 0:
             break
+        sliding = vx[_at(y, x)] != 0
         th = t.thermal[e]
         if th != 0 and ((th & (FLAMMABLE | IGNITES)) != 0 or not (t.cold_limit[e] <= heat[_at(y, x)] <= t.hot_limit[e])):
             break
         ready = True  # only the move is left to decide
         kind = t.archetype[e]
+        if sliding and kind != POWDER:
+            break  # moving: the full update
         if kind == LIQUID or kind == GAS:
             if (t.displaces[e] & present) != 0 and (t.displaces[e] & fluid_near(cells, x, y, t.fall_dir[e])) != 0:
                 break  # it may displace something next to it
@@ -135,10 +155,20 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key,
             below = cells[_at(ty, x)]
             opens = _enterable(t.displace[e, below], below, flags[_at(ty, x)])
         if not opens:
-            if (f & LOOSE) != 0:
+            if (f & LOOSE) == 0 and not sliding:
+                n += 1  # at rest on the ground: stays put
+                continue
+            if not _boxed_in(cells, t.displace, e, x, y, ty):
                 break  # on the ground, and loose: it may roll or slide
-            n += 1  # at rest on the ground: stays put
+            # Every cell it could roll, slide or sink into holds what it cannot enter: whatever its
+            # rolls, it comes to rest where it is, as the full update (move, settle) would leave it.
+            vx[_at(y, x)] = 0
+            flags[_at(y, x)] = f & ~LOOSE
+            busy_box = _box_with(busy_box, x, x, y, y)
+            n += 1
             continue
+        if sliding:
+            break  # falling with a sideways speed: the full update
         if below == 0 or ty >= y1 or not (0 < x and x + 1 < width and 0 < y):
             break  # falling through empty cells, into another tile's cells, or at the world's edge
         threshold = t.displace[e, below]
