@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).parent.parent
 TUTORIAL = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
@@ -33,11 +36,44 @@ def test_the_tutorial_runs_as_written(tmp_path):
                 done = _run(command, tmp_path)
                 assert done.returncode == 0, f"{command}\n{done.stdout}\n{done.stderr}"
                 outputs[command] = done.stdout + done.stderr
+    _prints_what_the_page_says(outputs, tmp_path)
+
+
+def _prints_what_the_page_says(outputs: dict[str, str], folder: Path) -> None:
     assert "snow:snow" in outputs["sandmod list"]
     assert outputs["sandmod test snow"].splitlines()[:2] == ["snow:stays_frozen ... ok", "snow:melts_in_warm_water ... ok"]
     shown = next(body for language, _, body in BLOCK.findall(TUTORIAL) if body.startswith("wrote snowfall.gif"))
     assert outputs["sandmod render snowfall.toml"].split(" in ")[0] == shown.split(" in ")[0]
-    assert (tmp_path / "snowfall.gif").stat().st_size > 0
+    assert (folder / "snowfall.gif").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_the_tutorial_runs_word_for_word_in_a_fresh_environment(tmp_path):
+    """As a new user runs it: a fresh virtual environment, sandmod installed from a copy of the
+    checkout (not editable), and every command of the page, pip's included, in a folder of its own."""
+    checkout, work, venv = tmp_path / "checkout", tmp_path / "work", tmp_path / "venv"
+    shutil.copytree(ROOT, checkout, ignore=shutil.ignore_patterns(".git", ".venv", "venv", "build", "site", "*.egg-info", "__pycache__", ".*_cache", ".hypothesis"))
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    work.mkdir()
+    scripts = venv / ("Scripts" if os.name == "nt" else "bin")
+    env = {**{k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}, "VIRTUAL_ENV": str(venv),
+           "PATH": f"{scripts}{os.pathsep}{os.environ.get('PATH', '')}"}
+    outputs = {}
+    for language, title, body in BLOCK.findall(TUTORIAL):
+        if title:
+            (work / title).parent.mkdir(parents=True, exist_ok=True)
+            (work / title).write_text(body, encoding="utf-8")
+        elif language == "bash":
+            for line in body.splitlines():
+                command = line.split(" #")[0].strip()
+                if command:
+                    folder = checkout if command == "pip install ." else work  # the page: from a checkout, then a folder of your own
+                    done = subprocess.run(command, shell=True, cwd=folder, env=env, capture_output=True, text=True)
+                    assert done.returncode == 0, f"{command}\n{done.stdout}\n{done.stderr}"
+                    outputs[command] = done.stdout + done.stderr
+    assert str(venv) in subprocess.run(["python", "-c", "import sandmod; print(sandmod.__file__)"], env=env, capture_output=True, text=True).stdout
+    assert "2 passed" in outputs["python -m pytest mods/ -q"]
+    _prints_what_the_page_says(outputs, work)
 
 
 def test_the_tutorials_example_of_a_mistake_is_what_validate_says(tmp_path):
