@@ -37,7 +37,7 @@ def test_the_file_reference_has_a_row_for_every_field_of_every_model(module, kin
         f"{model.__name__}.{name}"
         for model in _models(module)
         for name, field in model.model_fields.items()
-        if f"| `{field.alias or name}` |" not in text and not (name in ("archetype", "shape") and f'{name} = "' in text)  # a kind's heading
+        if f"></a>`{field.alias or name}` |" not in text and not (name in ("archetype", "shape") and f'{name} = "' in text)  # a kind's heading
     ]
     assert len(_models(module)) >= 5 and not missing
 
@@ -50,10 +50,17 @@ def test_the_world_reference_lists_each_shape_once():
 
 def test_the_file_reference_says_types_ranges_and_defaults():
     text = reference.file_reference("mod")
-    assert "| `density` | number | required | > 0, ≤ 100000 |" in text
-    assert "| `friction` | number | `0.6` | ≥ 0.0, ≤ 4.0 |" in text
+    assert '<a id="elements-name-powder-density"></a>`density` | number | required | > 0, ≤ 100000 |' in text
+    assert "`friction` | number | `0.6` | ≥ 0.0, ≤ 4.0 |" in text
     assert '#### archetype = "powder"' in text and "### `[[reactions]]`" in text and "### `[elements.NAME.flammable]`" in text
-    assert '| `from` | list of integer | required |' in reference.file_reference("world")  # the key as written, not the field's name
+    assert '`from` | list of integer | required |' in reference.file_reference("world")  # the key as written, not the field's name
+
+
+@pytest.mark.parametrize("kind", ["mod", "world", "sweep"])
+def test_every_field_of_the_file_references_has_an_anchor_of_its_own(kind):
+    rows = [line for line in reference.file_reference(kind).splitlines() if line.startswith("| ") and "`" in line.split("|")[1]]
+    anchors = [re.match(r'\| <a id="([a-z0-9-]+)"></a>`', row) for row in rows]
+    assert all(anchors) and len({a.group(1) for a in anchors}) == len(anchors)
 
 
 def _commands(group, prefix="sandmod"):
