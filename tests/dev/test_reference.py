@@ -109,3 +109,13 @@ def test_the_gallery_has_a_page_for_every_example_world_and_the_site_lists_them(
     for name in names:
         assert f"docs/gallery/{name}.md" in reference.PAGES and f"gallery/{name}.md" in nav
         assert reference._render_command(name), f"no page says how docs/images/{name}.webp is made"
+
+
+def test_the_file_references_show_real_examples_that_read_as_toml():
+    import tomllib
+
+    examples = re.findall(r"\| `([a-z_]+ = [^`]+)` \|$", reference.file_reference("mod") + "\n" + reference.file_reference("world"), re.M)
+    assert len(examples) >= 100
+    for example in examples:
+        tomllib.loads(example.replace("\\|", "|"))
+    assert "`density = 1600`" in reference.file_reference("mod") or "`density = 1400`" in reference.file_reference("mod")

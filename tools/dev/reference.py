@@ -14,10 +14,12 @@ text below its marker line is the generated part; write them anew with::
 
 from __future__ import annotations
 
+import functools
 import inspect
 import re
 import sys
 import textwrap
+import tomllib
 import types
 import typing
 from pathlib import Path
@@ -25,6 +27,7 @@ from typing import Annotated, Any, Literal, Union
 
 import annotated_types
 import click
+import tomli_w
 from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
@@ -137,9 +140,65 @@ def anchor_id(where: str, name: str) -> str:
 
 
 def _table(fields: dict[str, FieldInfo], where: str = "") -> list[str]:
-    """The fields' rows; with ``where`` (the table's path), each with an anchor to link to."""
-    rows = ["| field | type | default | allowed | description |", "|---|---|---|---|---|"]
-    return rows + [_row(field.alias or name, field, where) for name, field in fields.items()]
+    """The fields' rows; with ``where`` (the table's path), each with an anchor to link to and an
+    example from the bundled mods, example worlds and sweeps."""
+    rows = ["| field | type | default | allowed | description | example |", "|---|---|---|---|---|---|"]
+    return rows + [_row(field.alias or name, field, where) + f" {_example(where, field.alias or name)} |" for name, field in fields.items()]
+
+
+@functools.cache
+def _bundled_tables() -> list[tuple[str, str | None, dict]]:
+    """Every table of the bundled mods, example worlds and sweeps: (its name as the reference's
+    headings end, the kind it names (its archetype or shape), the table)."""
+    found: list[tuple[str, str | None, dict]] = []
+
+    def walk(name: str, table: dict) -> None:
+        found.append((name, table.get("archetype") or table.get("shape"), table))
+        for key, value in table.items():
+            if isinstance(value, dict):
+                if key == "elements":
+                    for element in value.values():
+                        if isinstance(element, dict):
+                            walk("elements", element)
+                else:
+                    walk(key, value)
+            elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+                for item in value:
+                    walk(key, item)
+
+    files = sorted((ROOT / "mods").glob("*.toml")) + sorted((ROOT / "examples").glob("*.toml")) + sorted((ROOT / "docs" / "sweeps").glob("*.toml"))
+    for path in files:
+        walk("", tomllib.loads(path.read_text(encoding="utf-8")))
+    return found
+
+
+def _toml_value(value) -> str:
+    """A value as TOML writes it inline."""
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        keys = [k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _toml_value(k) for k in value]
+        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in zip(keys, value.values())) + " }"
+    return tomli_w.dumps({"v": value}).split(" = ", 1)[1].strip()
+
+
+def _example(where: str, name: str) -> str:
+    """``name = value`` as a bundled file writes it in a table like ``where`` (``[elements.NAME].powder``,
+    ``shape.rect``, ``[[reactions]]``), or nothing when none does."""
+    section, _, kind = where.rpartition("]") if "]" in where else (where, "", "")
+    if where.startswith("shape."):
+        section, kind = "", where.split(".", 1)[1]
+    parts = [p for p in section.strip("[]").split(".") if p and p != "NAME"]
+    table_name = parts[-1] if parts else ("" if where in ("mod", "world", "sweep") or where.startswith("shape.") else where)
+    kind = kind.lstrip(".") or None
+    for found_name, found_kind, table in _bundled_tables():
+        if (where.startswith("shape.") or found_name == table_name) and (kind is None or found_kind == kind) and name in table:
+            value = table[name]
+            if isinstance(value, list) and value and isinstance(value[0], dict):
+                return ""  # a list of tables: its own section has the examples
+            text = f"{name} = {_toml_value(value)}"
+            return f"`{text}`".replace("|", "\\|") if len(text) <= 64 and "\n" not in text else ""
+    return ""
 
 
 def _key_of(field_name: str, annotation) -> str:
