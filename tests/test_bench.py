@@ -200,6 +200,15 @@ def test_bench_record_splits_a_render_into_steps_images_and_encoding():
     assert bad.exit_code == 2 and "unknown format 'mp4'" in bad.stderr
 
 
+def test_a_render_measured_from_a_large_process_reports_its_own_peak_not_that_of_the_process_that_started_it():
+    import numpy as np
+
+    from sandmod.jobs.benchmark import render_peak_memory
+
+    ballast = np.ones(600 * 2**20 // 8)  # 600 MB touched here: ru_maxrss would hand it to the render's process
+    assert render_peak_memory(128).peak_mb < 500 and ballast[-1] == 1
+
+
 def test_bench_memory_measures_a_render_in_a_process_of_its_own_and_the_estimate_covers_it():
     result = CliRunner().invoke(cli, ["bench", "--memory", "512", "--json"], catch_exceptions=False)
     assert result.exit_code == 0, result.output
