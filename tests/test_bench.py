@@ -109,6 +109,7 @@ def test_bench_says_what_is_wrong_with_a_world(tmp_path, monkeypatch, args, mess
 def test_peak_memory_without_the_resource_module_asks_windows(monkeypatch):
     """Windows has no ``resource``: bench must still run there, reporting the peak working set."""
     assert benchmark.peak_memory_mb() > 1
+    monkeypatch.setattr(sys, "platform", "win32")
     monkeypatch.setitem(sys.modules, "resource", None)  # import resource -> ImportError
     monkeypatch.setattr(benchmark, "_peak_working_set", lambda: 3 * 2**20)
     assert benchmark.peak_memory_mb() == 3.0

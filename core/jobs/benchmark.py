@@ -180,13 +180,11 @@ def peak_memory_mb() -> float:
 
     On Linux, ``VmHWM`` of /proc/self/status: ``ru_maxrss`` keeps the peak of the process that
     started this one across the exec (a render started from a 500 MB test run read 525 MB)."""
-    try:
-        with open("/proc/self/status", encoding="ascii") as status:
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError), open("/proc/self/status", encoding="ascii") as status:
             for line in status:
                 if line.startswith("VmHWM:"):
                     return int(line.split()[1]) / 2**10  # kB
-    except OSError:
-        pass
     try:
         import resource
     except ImportError:  # Windows
