@@ -61,7 +61,7 @@ def read_sweep(path: Path, out: Path, mod_dirs: Iterable[Path] = (), *, jobs: in
     if problems:
         raise ProblemsError(problems)
     sweep = Sweep(Path(path), spec)
-    for number, (name, world_path) in enumerate(worlds):
+    for name, world_path in worlds:
         planner = _WorldPlanner(spec, source, name, world_path, mod_dirs, Path(out).absolute(), max_memory)
         problems += planner.check()
         if not problems:
