@@ -103,11 +103,11 @@ class _Strict(BaseModel):
 class ModInfo(_Strict):
     """The ``[mod]`` table: who this mod is and what it builds on."""
 
-    name: ModName = Field(description="The mod's name; element ids inside it are 'NAME:element'.")
+    name: ModName = Field(description="The mod's name; element ids inside it are 'NAME:element'.", examples=["snow"])
     version: Annotated[str, AfterValidator(_version)] = Field(
         "0.1.0", description="The mod's version, e.g. '1.2.0' (the standard, PEP 440: '2.0.0rc1' is a pre-release)."
     )
-    description: str = Field("", max_length=2000, description="One or two sentences for 'sandmod list'.")
+    description: str = Field("", max_length=2000, description="One or two sentences for 'sandmod list'.", examples=["Snow: light white flakes that pile up steeply."])
     requires: list[Requirement] = Field(
         default_factory=list,
         description="Mods whose elements this mod names, loaded first; a version range may follow "
@@ -130,7 +130,7 @@ class ModInfo(_Strict):
 class Lifetime(_Strict):
     """After ``frames`` frames (plus up to ``jitter`` more) a cell becomes another element."""
 
-    frames: int = Field(ge=1, le=60000, description="Frames a cell lives before it turns into 'becomes'.")
+    frames: int = Field(ge=1, le=60000, description="Frames a cell lives before it turns into 'becomes'.", examples=[120])
     jitter: int = Field(0, ge=0, le=5000, description="Up to this many extra frames, chosen per cell.")
     becomes: ElementName = Field(description="The element a cell turns into when its time is up.")
 
@@ -158,7 +158,7 @@ class Heated(_Strict):
     above: Temperature = Field(description="Degrees Celsius; hotter than this, it changes.")
     becomes: ElementName = Field(description="The element it turns into (water: 'steam').")
     latent_heat: float | None = Field(None, ge=0.0, le=1e6, description=_LATENT)
-    spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD)
+    spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD, examples=[10])
 
 
 class Cooled(_Strict):
@@ -168,7 +168,7 @@ class Cooled(_Strict):
     below: Temperature = Field(description="Degrees Celsius; colder than this, it changes.")
     becomes: ElementName = Field(description="The element it turns into (lava: 'stone').")
     latent_heat: float | None = Field(None, ge=0.0, le=1e6, description=_LATENT)
-    spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD)
+    spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD, examples=[20])
 
 
 class Flammable(_Strict):
@@ -183,13 +183,13 @@ class Flammable(_Strict):
     burn_temperature: Temperature = Field(
         700.0, description="While burning it heats itself by 'heat' degrees a frame up to this temperature."
     )
-    heat: float = Field(20.0, ge=0.0, le=1000.0, description="Degrees a burning cell gains each frame (up to burn_temperature).")
+    heat: float = Field(20.0, ge=0.0, le=1000.0, description="Degrees a burning cell gains each frame (up to burn_temperature).", examples=[30])
     flame: ElementName | None = Field(
         None, description="What a burning cell gives off into the empty cells it touches, e.g. 'fire'."
     )
     flame_chance: float = Field(0.2, ge=0.0, le=1.0, description="Chance per frame of giving off a flame into an empty neighbour.")
-    leaves: ElementName = Field(EMPTY_ID, description="What a burnt-out cell becomes, e.g. 'ash' (default: nothing).")
-    leaves_chance: float = Field(1.0, ge=0.0, le=1.0, description="Chance that a burnt-out cell leaves that (else nothing).")
+    leaves: ElementName = Field(EMPTY_ID, description="What a burnt-out cell becomes, e.g. 'ash' (default: nothing).", examples=["ash"])
+    leaves_chance: float = Field(1.0, ge=0.0, le=1.0, description="Chance that a burnt-out cell leaves that (else nothing).", examples=[0.5])
 
     @model_validator(mode="after")
     def _heats_to_burn(self) -> "Flammable":
@@ -209,18 +209,19 @@ class Explosion(_Strict):
 
     radius: int = Field(ge=1, le=MAX_BLAST_RADIUS, description=f"Reach in cells (1 to {MAX_BLAST_RADIUS}).")
     strength: float = Field(gt=0.0, le=100000.0, description="What a ray can spend on destroying cells (stone resists 2 a cell).")
-    leaves: ElementName = Field(EMPTY_ID, description="What destroyed cells become, e.g. 'fire' for a flash (default: nothing).")
-    leaves_chance: float = Field(1.0, ge=0.0, le=1.0, description="Chance that a destroyed cell becomes 'leaves' (else nothing).")
-    fling: float = Field(0.5, ge=0.0, le=1.0, description="Share of destroyed powder and liquid cells that fly off as particles.")
-    speed: float = Field(6.0, gt=0.0, le=MAX_SPEED, description="Speed of flung cells, in cells per frame, at the centre.")
+    leaves: ElementName = Field(EMPTY_ID, description="What destroyed cells become, e.g. 'fire' for a flash (default: nothing).", examples=["fire"])
+    leaves_chance: float = Field(1.0, ge=0.0, le=1.0, description="Chance that a destroyed cell becomes 'leaves' (else nothing).", examples=[0.3])
+    fling: float = Field(0.5, ge=0.0, le=1.0, description="Share of destroyed powder and liquid cells that fly off as particles.", examples=[0.8])
+    speed: float = Field(6.0, gt=0.0, le=MAX_SPEED, description="Speed of flung cells, in cells per frame, at the centre.", examples=[10])
     heat: Temperature | None = Field(
-        None, description="Destroyed and scorched cells are heated to at least this temperature (may light what is near)."
+        None, description="Destroyed and scorched cells are heated to at least this temperature (may light what is near).",
+        examples=[800],
     )
-    scorch: int = Field(3, ge=0, le=MAX_BLAST_RADIUS, description="Width in cells of the darkened fringe past the destruction.")
+    scorch: int = Field(3, ge=0, le=MAX_BLAST_RADIUS, description="Width in cells of the darkened fringe past the destruction.", examples=[5])
 
 
 class _ElementBase(_Strict):
-    description: str = Field("", max_length=2000, description="What the element is, for 'sandmod list'.")
+    description: str = Field("", max_length=2000, description="What the element is, for 'sandmod list'.", examples=["Falls in flakes and piles up steeply."])
     color: Annotated[list[HexColor], BeforeValidator(_as_list)] = Field(
         description="Display colour ('#rrggbb'), or a list of up to 8 that each cell picks one of.",
         json_schema_extra={"anyOf": [{"type": "string"}, {"type": "array"}]},
@@ -237,7 +238,7 @@ class _ElementBase(_Strict):
         False,
         description="Set to replace an element another mod defines (the key is then 'mod:element').",
     )
-    temperature: Temperature = Field(20.0, description="Temperature of a newly placed cell, in degrees Celsius.")
+    temperature: Temperature = Field(20.0, description="Temperature of a newly placed cell, in degrees Celsius.", examples=[-5])
     heat_capacity: float = Field(
         1.0, ge=0.05, le=10.0, description="Heat it takes to warm a cell by one degree, relative to stone (water 4)."
     )
@@ -291,18 +292,20 @@ _DISPERSION = Field(
 )
 
 
-def _gravity(default: float) -> object:
+def _gravity(default: float, **more) -> object:
     return Field(
         default,
+        **more,
         ge=0.0,
         le=2.0,
         description="Acceleration while falling (gases: while rising), in cells per frame per frame.",
     )
 
 
-def _max_speed(default: float) -> object:
+def _max_speed(default: float, **more) -> object:
     return Field(
         default,
+        **more,
         ge=1.0,
         le=MAX_SPEED,
         description=f"Terminal speed in cells per frame (1 to {MAX_SPEED}); a mover always goes at least 1.",
@@ -333,8 +336,8 @@ class PowderElement(_ElementBase):
 
     archetype: Literal["powder"]
     density: float = _DENSITY
-    gravity: float = _gravity(0.2)
-    max_speed: float = _max_speed(8.0)
+    gravity: float = _gravity(0.2, examples=[0.1])
+    max_speed: float = _max_speed(8.0, examples=[4])
     friction: float = Field(
         0.6,
         ge=0.0,
@@ -350,6 +353,7 @@ class PowderElement(_ElementBase):
         ge=0.0,
         le=1.0,
         description="Share of its landing speed a grain turns into sideways speed (0 = lands dead, 1 = all of it).",
+        examples=[0.5],
     )
     inertial_resistance: float = Field(
         0.1,
@@ -371,8 +375,8 @@ class LiquidElement(_ElementBase):
         lt=1.0,
         description="Chance per frame that the liquid does not flow (0 = runny, 0.9 = treacle); it still falls.",
     )
-    gravity: float = _gravity(0.2)
-    max_speed: float = _max_speed(8.0)
+    gravity: float = _gravity(0.2, examples=[0.3])
+    max_speed: float = _max_speed(8.0, examples=[6])
 
 
 class GasElement(_ElementBase):
@@ -381,8 +385,8 @@ class GasElement(_ElementBase):
     archetype: Literal["gas"]
     density: float = _DENSITY
     dispersion: int = _DISPERSION
-    gravity: float = _gravity(0.02)
-    max_speed: float = _max_speed(2.0)
+    gravity: float = _gravity(0.02, examples=[0.05])
+    max_speed: float = _max_speed(2.0, examples=[3])
 
 
 class ParticleElement(_ElementBase):
@@ -397,10 +401,11 @@ class ParticleElement(_ElementBase):
         le=2.0,
         description="Downward acceleration in cells per frame per frame (negative: it rises, like embers).",
     )
-    max_speed: float = _max_speed(float(MAX_SPEED))
-    drag: float = Field(0.0, ge=0.0, le=0.5, description="Share of its speed a particle loses per frame in flight.")
+    max_speed: float = _max_speed(float(MAX_SPEED), examples=[12])
+    drag: float = Field(0.0, ge=0.0, le=0.5, description="Share of its speed a particle loses per frame in flight.", examples=[0.05])
     carries: ElementName | None = Field(
-        None, description="What a spawned particle of this element carries and puts down (nothing if left out)."
+        None, description="What a spawned particle of this element carries and puts down (nothing if left out).",
+        examples=["sand"],
     )
 
 
@@ -423,16 +428,19 @@ class Reaction(_Strict):
     b_becomes: ElementName | None = Field(None, description="What the second cell becomes (unchanged if left out).")
     chance: float = Field(gt=0.0, le=1.0, description="Chance per frame that a touching pair reacts.")
     min_temperature: Temperature | None = Field(
-        None, description="It happens only when the pair's mean temperature is at least this (degrees Celsius)."
+        None, description="It happens only when the pair's mean temperature is at least this (degrees Celsius).",
+        examples=[100],
     )
     max_temperature: Temperature | None = Field(
-        None, description="It happens only when the pair's mean temperature is at most this (degrees Celsius)."
+        None, description="It happens only when the pair's mean temperature is at most this (degrees Celsius).",
+        examples=[0],
     )
     heat: float = Field(
         0.0,
         ge=-10000.0,
         le=10000.0,
         description="Degrees added to each cell that changes: positive releases heat, negative absorbs it.",
+        examples=[50],
     )
 
     @model_validator(mode="after")
@@ -454,15 +462,15 @@ DEFAULT_WILDCARD = "?"
 class Placed(_Strict):
     """A legend entry that also sets the temperature of the cells it paints."""
 
-    element: ElementName = Field(description="The element painted where the character is.")
-    temperature: Temperature = Field(description="Their temperature, in degrees Celsius.")
+    element: ElementName = Field(description="The element painted where the character is.", examples=["water"])
+    temperature: Temperature = Field(description="Their temperature, in degrees Celsius.", examples=[40])
 
 
 class Bounds(_Strict):
     """A closed range; either end may be left out."""
 
-    min: float | None = Field(None, description="Lowest allowed value.")
-    max: float | None = Field(None, description="Highest allowed value.")
+    min: float | None = Field(None, description="Lowest allowed value.", examples=[100])
+    max: float | None = Field(None, description="Highest allowed value.", examples=[400])
 
     @model_validator(mode="after")
     def _ordered(self) -> "Bounds":
@@ -489,23 +497,24 @@ class ModTest(_Strict):
     hold after ``frames`` frames.
     """
 
-    name: str = Field(pattern=rf"^{TEST_NAME}$", description="Short name, unique in the mod (lower case, digits, _ and -).")
-    description: str = Field("", max_length=2000, description="What the test shows.")
+    name: str = Field(pattern=rf"^{TEST_NAME}$", description="Short name, unique in the mod (lower case, digits, _ and -).", examples=["sinks_in_water"])
+    description: str = Field("", max_length=2000, description="What the test shows.", examples=["Sand poured into water sinks to the bottom."])
     mods: list[ModName] = Field(
         default_factory=list,
         description="Other mods to load for this test, besides this one and what it requires (e.g. 'water' to sink sand in).",
     )
-    seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice.")
-    frames: int = Field(ge=0, le=100000, description="Frames to run before checking.")
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice.", examples=[7])
+    frames: int = Field(ge=0, le=100000, description="Frames to run before checking.", examples=[60])
     legend: dict[str, ElementName | Placed] = Field(
         default_factory=dict,
         description="One character -> an element, or {element, temperature}. '.' is 'empty' unless given.",
+        examples=[{"S": "sand", "w": {"element": "water", "temperature": 40}}],
     )
-    scene: str = Field(description="The starting cells: one line per row, one legend character per cell.")
+    scene: str = Field(description="The starting cells: one line per row, one legend character per cell.", examples=["..S..\n.www.\n#####"])
     expect: str | None = Field(
         None, description="The exact cells after 'frames' frames, drawn like 'scene'; the wildcard matches any cell."
     )
-    wildcard: str = Field(DEFAULT_WILDCARD, min_length=1, max_length=1, description="The character in 'expect' that matches any cell.")
+    wildcard: str = Field(DEFAULT_WILDCARD, min_length=1, max_length=1, description="The character in 'expect' that matches any cell.", examples=["*"])
     count: dict[ElementName, Count] = Field(
         default_factory=dict,
         description="Cells of an element at the end: an exact number or [fewest, most]; flying particles count as what they carry.",
@@ -513,7 +522,8 @@ class ModTest(_Strict):
     present: list[ElementName] = Field(default_factory=list, description="Elements that must be somewhere at the end.")
     absent: list[ElementName] = Field(default_factory=list, description="Elements that must be nowhere at the end.")
     temperature: dict[ElementName, Bounds] = Field(
-        default_factory=dict, description="Bounds in degrees Celsius that every cell of an element must be within at the end."
+        default_factory=dict, description="Bounds in degrees Celsius that every cell of an element must be within at the end.",
+        examples=[{"steam": {"min": 100, "max": 400}}],
     )
 
     @field_validator("legend")

@@ -68,7 +68,7 @@ class SweepInfo(_Strict):
     seeds: Annotated[list[Seed], Field(max_length=MAX_RUNS)] | SeedRange = Field(
         default_factory=lambda: [0], description="Seeds to run each world with: a list (each seed once), or { from = 0, to = 99 }."
     )
-    frames: int | None = Field(None, ge=1, le=100000, description="Frames each run simulates (default: each world's own).")
+    frames: int | None = Field(None, ge=1, le=100000, description="Frames each run simulates (default: each world's own).", examples=[300])
 
     @field_validator("seeds", mode="before")
     @classmethod
@@ -86,11 +86,12 @@ class SweepInfo(_Strict):
 class RecordSettings(_Strict):
     """The ``[record]`` table: what each run keeps besides its metrics."""
 
-    format: str = Field("none", min_length=1, description="An output format (gif, webp, apng, png-frames, a plugin's) or 'none'.")
-    every: int | None = Field(None, ge=1, le=1000, description="Frames per image (default: the world's own).")
-    scale: int | None = Field(None, ge=1, le=16, description="Pixels per cell (default: the world's own).")
+    format: str = Field("none", min_length=1, description="An output format (gif, webp, apng, png-frames, a plugin's) or 'none'.", examples=["webp"])
+    every: int | None = Field(None, ge=1, le=1000, description="Frames per image (default: the world's own).", examples=[4])
+    scale: int | None = Field(None, ge=1, le=16, description="Pixels per cell (default: the world's own).", examples=[2])
     snapshots: list[Annotated[int, Field(ge=1, le=100000)]] = Field(
-        default_factory=list, max_length=100, description="Frames to save the whole state at, as snapshots."
+        default_factory=list, max_length=100, description="Frames to save the whole state at, as snapshots.",
+        examples=[[250]],
     )
 
 
@@ -98,7 +99,8 @@ class MetricSettings(_Strict):
     """The ``[metrics]`` table: what is measured in each run, and when."""
 
     frames: list[Annotated[int, Field(ge=0, le=100000)]] = Field(
-        default_factory=list, max_length=100, description="Frames to measure at (default: the last)."
+        default_factory=list, max_length=100, description="Frames to measure at (default: the last).",
+        examples=[[100, 500]],
     )
     names: list[str] | None = Field(
         None, max_length=100, description="Metrics to take (default: all: counts, centre, extent, awake, heat, and plugins')."
@@ -114,6 +116,7 @@ class SweepFile(_Strict):
         description="A grid of values by dotted path: 'elements.NAME.FIELD' into the mods, 'world.FIELD' or 'render.FIELD' "
         "into each world; every combination is a run. A path's values are all numbers, all text or all true/false, each "
         "listed once, and each must take effect. At most 100,000 runs in one sweep (worlds x combinations x seeds).",
+        examples=[{"elements.sand.friction": [0.4, 0.8], "world.gravity": [0.5, 1.0]}],
     )
     record: RecordSettings = Field(default_factory=RecordSettings, description="What each run records.")
     metrics: MetricSettings = Field(default_factory=MetricSettings, description="What each run measures.")

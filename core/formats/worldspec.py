@@ -96,7 +96,7 @@ class WorldInfo(_Strict):
 
     width: int = Field(ge=4, le=MAX_SIZE, description="Width in cells.")
     height: int = Field(ge=4, le=MAX_SIZE, description="Height in cells.")
-    seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice; same seed, same frames.")
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice; same seed, same frames.", examples=[42])
     mods: list[ModName] | None = Field(
         None, description="Mods to load (with what they require, and 'base'); all that are found if left out."
     )
@@ -108,11 +108,13 @@ class WorldInfo(_Strict):
             "Scales every element's gravity: 1 as the mods set it, 0.5 moon-like, "
             "0 none (movers still go one cell a frame)."
         ),
+        examples=[0.5],
     )
     made_with: dict[ModName, str] | None = Field(
         None,
         description="The mods and versions the world was made with ('sandmod new world' writes it); "
         "loading it with other mods or versions prints a warning.",
+        examples=[{"base": "1.0.0", "sand": "1.0.0"}],
     )
 
 
@@ -142,7 +144,7 @@ class LineArea(_Strict):
     first: Point = Field(alias="from", description="First cell, [x, y].")
     last: Point = Field(alias="to", description="Last cell, [x, y].")
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
-    brush: Literal["round", "square"] = Field("round", description="The brush's shape: round, or a square 'thickness' cells a side.")
+    brush: Literal["round", "square"] = Field("round", description="The brush's shape: round, or a square 'thickness' cells a side.", examples=["square"])
 
 
 class StrokeArea(_Strict):
@@ -151,7 +153,7 @@ class StrokeArea(_Strict):
     shape: Literal["stroke"]
     points: list[Point] = Field(min_length=2, max_length=4096, description="The corners, [[x, y], ...], in order.")
     thickness: int = Field(1, ge=1, le=64, description="Brush diameter in cells.")
-    brush: Literal["round", "square"] = Field("round", description="The brush's shape: round, or a square 'thickness' cells a side.")
+    brush: Literal["round", "square"] = Field("round", description="The brush's shape: round, or a square 'thickness' cells a side.", examples=["square"])
 
     @field_validator("points")
     @classmethod
@@ -173,11 +175,12 @@ Area = Annotated[Union[RectArea, CircleArea, LineArea, StrokeArea, FillArea], Fi
 
 
 class _Paint(_Strict):
-    element: ElementRef = Field(description="The element to paint ('empty' erases).")
+    element: ElementRef = Field(description="The element to paint ('empty' erases).", examples=["sand"])
     temperature: Temperature | None = Field(
-        None, description="Degrees Celsius of the painted cells (default: the element's own)."
+        None, description="Degrees Celsius of the painted cells (default: the element's own).",
+        examples=[900],
     )
-    over: ElementRef | None = Field(None, description="Paint only the cells that hold this element (a replace brush).")
+    over: ElementRef | None = Field(None, description="Paint only the cells that hold this element (a replace brush).", examples=["water"])
 
 
 class Rect(RectArea, _Paint):
@@ -211,22 +214,23 @@ class Picture(_Strict):
     file: str = Field(min_length=1, description="The image, relative to the world file.")
     legend: dict[HexColor, ElementRef] = Field(
         min_length=1,
-        max_length=256, description="Which element each colour paints: {'#rrggbb' = 'element'}; 'empty' clears."
+        max_length=256, description="Which element each colour paints: {'#rrggbb' = 'element'}; 'empty' clears.",
+        examples=[{"#c2b280": "sand", "#3366ff": "water"}],
     )
     match: Literal["exact", "nearest"] = Field(
         "exact", description="'exact': every colour must be in the legend; 'nearest': the closest legend colour."
     )
-    x: Coord = Field(0, description="Left column of the box the picture covers.")
-    y: Coord = Field(0, description="Top row of the box.")
-    width: int | None = Field(None, ge=1, le=MAX_SIZE, description="Width of the box in cells (default: to the right edge).")
-    height: int | None = Field(None, ge=1, le=MAX_SIZE, description="Height of the box in cells (default: to the bottom).")
+    x: Coord = Field(0, description="Left column of the box the picture covers.", examples=[10])
+    y: Coord = Field(0, description="Top row of the box.", examples=[20])
+    width: int | None = Field(None, ge=1, le=MAX_SIZE, description="Width of the box in cells (default: to the right edge).", examples=[96])
+    height: int | None = Field(None, ge=1, le=MAX_SIZE, description="Height of the box in cells (default: to the bottom).", examples=[64])
 
 
 Shape = Annotated[Union[Rect, Circle, Line, Stroke, Fill, Picture], Field(discriminator="shape")]
 
 
 class _Timed(_Strict):
-    name: str | None = Field(None, pattern=r"^[A-Za-z0-9_-]+$", description="A name the timeline can start and stop it by.")
+    name: str | None = Field(None, pattern=r"^[A-Za-z0-9_-]+$", description="A name the timeline can start and stop it by.", examples=["tap"])
     start: int = Field(0, ge=0, le=MAX_FRAMES, description="First frame it is on.")
     stop: int | None = Field(None, ge=1, le=MAX_FRAMES + 1, description="It stops before this frame (never, if left out).")
 
@@ -270,11 +274,12 @@ def _as_range(value: object) -> object:
 
 
 class _Flight(_Strict):
-    direction: float = Field(90, ge=-360, le=360, description="Degrees: 0 right, 90 up, 180 left, -90 down.")
-    spread: float = Field(0, ge=0, le=360, description="Width of the cone of directions, in degrees.")
+    direction: float = Field(90, ge=-360, le=360, description="Degrees: 0 right, 90 up, 180 left, -90 down.", examples=[45])
+    spread: float = Field(0, ge=0, le=360, description="Width of the cone of directions, in degrees.", examples=[30])
     speed: Annotated[list[Speed], BeforeValidator(_as_range), Field(min_length=2, max_length=2)] = Field(
         description=f"Cells per frame (at most {MAX_SPEED}), or [slowest, fastest].",
         json_schema_extra={"anyOf": [{"type": "number"}, {"type": "array"}]},
+        examples=[[2, 4]],
     )
 
     @field_validator("speed")
@@ -417,15 +422,18 @@ class RenderSettings(_Strict):
     every: int = Field(2, ge=1, le=1000, description="Frames simulated per image written.")
     scale: int = Field(3, ge=1, le=16, description="Pixels per cell (nearest neighbour).")
     fps: float = Field(25, gt=0, le=50, description="Images per second when played back (GIF: delays of at least 20 ms).")
-    loop: int = Field(0, ge=0, le=65535, description="Times the animation plays in all; 0 = forever.")
+    loop: int = Field(0, ge=0, le=65535, description="Times the animation plays in all; 0 = forever.", examples=[1])
     crop: list[Coord] | None = Field(
-        None, min_length=4, max_length=4, description="Record only this region of cells: [x, y, width, height]."
+        None, min_length=4, max_length=4, description="Record only this region of cells: [x, y, width, height].",
+        examples=[[0, 40, 160, 60]],
     )
     format: str | None = Field(
-        None, min_length=1, description="Output format (gif, apng, webp, png-frames, ...); default: by the output's extension."
+        None, min_length=1, description="Output format (gif, apng, webp, png-frames, ...); default: by the output's extension.",
+        examples=["webp"],
     )
     output: str | None = Field(
-        None, min_length=1, description="Output file, relative to the world file; default: WORLD_NAME.gif here."
+        None, min_length=1, description="Output file, relative to the world file; default: WORLD_NAME.gif here.",
+        examples=["renders/hourglass.webp"],
     )
 
 

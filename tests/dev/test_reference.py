@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import inspect
 import re
+from typing import Annotated
 
 import pytest
 import reference
-from pydantic import BaseModel
+from pydantic import BaseModel, TypeAdapter
 
 import sandmod
 from sandmod import api
@@ -119,3 +120,22 @@ def test_the_file_references_show_real_examples_that_read_as_toml():
     for example in examples:
         tomllib.loads(example.replace("\\|", "|"))
     assert "`density = 1600`" in reference.file_reference("mod") or "`density = 1400`" in reference.file_reference("mod")
+
+
+@pytest.mark.parametrize("kind", ["mod", "world", "sweep"])
+def test_every_field_of_the_file_references_has_an_example(kind):
+    rows = [line for line in reference.file_reference(kind).splitlines() if line.startswith("| <a id=")]
+    assert rows and [row.split("`")[1] for row in rows if row.endswith("|  |")] == []
+
+
+def test_every_example_a_model_gives_is_a_value_its_field_takes():
+    checked = 0
+    for module in (modspec, sweepspec, worldspec):
+        for model in vars(module).values():
+            if isinstance(model, type) and issubclass(model, BaseModel) and model.__module__ == module.__name__:
+                for name, field in model.model_fields.items():
+                    for example in field.examples or []:
+                        kind = Annotated[field.annotation, *field.metadata] if field.metadata else field.annotation
+                        TypeAdapter(kind).validate_python(example)
+                        checked += 1
+    assert checked >= 60

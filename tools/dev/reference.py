@@ -143,7 +143,21 @@ def _table(fields: dict[str, FieldInfo], where: str = "") -> list[str]:
     """The fields' rows; with ``where`` (the table's path), each with an anchor to link to and an
     example from the bundled mods, example worlds and sweeps."""
     rows = ["| field | type | default | allowed | description | example |", "|---|---|---|---|---|---|"]
-    return rows + [_row(field.alias or name, field, where) + f" {_example(where, field.alias or name)} |" for name, field in fields.items()]
+    return rows + [_row(field.alias or name, field, where) + f" {_example_cell(where, field.alias or name, field)} |" for name, field in fields.items()]
+
+
+def _example_cell(where: str, name: str, field: FieldInfo) -> str:
+    """An example of the field: as a bundled file writes it, else the model's own example, or for a
+    table, the key it is written under."""
+    if found := _example(where, name):
+        return found
+    if field.examples:
+        return f"`{name} = {_toml_value(field.examples[0])}`".replace("|", "\\|")
+    if _models_in(field.annotation):
+        key = _key_of(name, field.annotation)
+        parent = where.rpartition("]")[0] + "]" if "]" in where else ""
+        return f"`{_inside(parent, key) if parent and not where.startswith('shape.') else key}`"
+    return ""
 
 
 @functools.cache
