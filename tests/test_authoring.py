@@ -206,3 +206,29 @@ def test_validate_reports_what_field_mistakes_would_hide_in_the_same_pass(tmp_pa
     fixed = GOO.replace("-1", "900").replace("99", "3").replace('"red"', '"#44aa33"').replace("chance = 5", "chance = 0.5")
     write_mods(tmp_path / "mods", {"goo.toml": fixed})
     assert invoke("validate").stderr.splitlines() == first[-1:]  # nothing new once the fields are right
+
+
+def test_validate_reports_a_tables_own_checks_beside_its_field_mistakes(tmp_path, monkeypatch):
+    """A check across a table's fields (burn_temperature against ignites_at) is made in the same pass
+    as the table's field mistakes, unless it names a field that is wrong (it would see its default)."""
+    log = """
+        [mod]
+        name = "logs"
+
+        [elements.log]
+        archetype = "static"
+        color = "#884400"
+        flammable = { ignites_at = 500, burn_temperature = 300, flame_chance = 2 }
+
+        [elements.twig]
+        archetype = "static"
+        color = "#884400"
+        flammable = { ignites_at = 900, burn_temperature = -900 }  # left out, it would be 700: below 900
+    """
+    write_mods(tmp_path / "mods", {"logs.toml": log})
+    monkeypatch.chdir(tmp_path)
+    assert invoke("validate").stderr.splitlines() == [
+        "mods/logs.toml:7:1: elements.log.flammable: burn_temperature must be at least ignites_at, or the fire would go out at once",
+        "mods/logs.toml:7:57: elements.log.flammable.flame_chance: must be <= 1 (got 2)",
+        "mods/logs.toml:12:33: elements.twig.flammable.burn_temperature: must be >= -273 (got -900)",
+    ]

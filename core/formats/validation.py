@@ -8,6 +8,8 @@ keys that are allowed there.
 
 from __future__ import annotations
 
+import copy
+import re
 import types
 import typing
 from typing import Any, TypeVar
@@ -29,8 +31,48 @@ def validate(model: type[M], source: TomlSource) -> M:
     try:
         return model.model_validate(source.data)
     except ValidationError as exc:
-        problems = [_to_problem(model, source, err) for err in exc.errors()]
+        errors = exc.errors()
+        problems = [_to_problem(model, source, err) for err in errors + _behind_field_mistakes(model, source.data, errors)]
         raise ProblemsError(sorted(set(problems), key=lambda p: (p.line or 0, p.path, p.message))) from None
+
+
+def _behind_field_mistakes(model: type[BaseModel], data: Any, errors: list) -> list:
+    """The mistakes a table's own checks across its fields find (``burn_temperature must be at least
+    ignites_at``), which pydantic makes only once every field of the table is right: found by
+    validating again with each mistaken field left out. A check that names a field left out of its
+    table is not reported, since it saw that field's default rather than what the file says."""
+    data, left_out = copy.deepcopy(data), set()
+    for err in errors:
+        loc = tuple(err["loc"])
+        if err["type"] == "missing" or "[key]" in loc:
+            continue
+        written = _written_loc(data, loc)
+        parent = _at(data, written[:-1])
+        if written and isinstance(parent, dict) and written[-1] in parent:  # not where a mistake left out a table
+            del parent[written[-1]]
+            left_out.add((written[:-1], str(written[-1])))
+    if not left_out:
+        return []
+    try:
+        model.model_validate(data)
+        return []
+    except ValidationError as again:
+        return [err for err in again.errors() if err["type"] == "value_error" and not _names_one_left_out(err, data, left_out)]
+
+
+def _names_one_left_out(err: Any, data: Any, left_out: set[tuple[Loc, str]]) -> bool:
+    table = _written_loc(data, tuple(err["loc"]))
+    return any(where == table and re.search(rf"\b{re.escape(name)}\b", err["msg"]) for where, name in left_out)
+
+
+def _at(data: Any, loc: Loc) -> Any:
+    """What ``data`` holds at ``loc``, or None where nothing is."""
+    for part in loc:
+        try:
+            data = data[part]
+        except (KeyError, IndexError, TypeError):
+            return None
+    return data
 
 
 def _to_problem(model: type[BaseModel], source: TomlSource, err: Any):
