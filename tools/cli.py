@@ -850,12 +850,13 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
         raise click.ClickException('sandmod play needs pygame-ce: pip install "sandmod[play]"')
     from sandmod.jobs import play as window
     from sandmod.jobs.session import Session
-    from sandmod.jobs.warmup import compile_new_kernels
+    from sandmod.jobs.warmup import compile_new_kernels, compile_parallel
 
     if world is not None and size is not None:
         raise click.UsageError("--size sizes a new world; a world file has its own size")
     session = Session.open(world, size=size or ((512, 384) if benchmark_frames and world is None else None), mod_dirs=_mod_folders(mod_dirs))
     compile_new_kernels(session.world.ruleset, announce=_say)
+    compile_parallel(session.world, announce=_say)  # before the window opens, not in its first frames
     if benchmark_frames:
         click.echo(json.dumps(window.benchmark(session, scale, benchmark_frames, busy=world is None)))
         return
