@@ -1,4 +1,5 @@
-"""The tutorial runs as written: in a fresh folder, its files are written and its commands run, in order."""
+"""The docs are true word for word: the tutorial and each how-to run as written (their files
+written, their commands and scripts run, in order) and print what they say."""
 
 from __future__ import annotations
 
@@ -7,80 +8,132 @@ import re
 import shutil
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
+from pages import BLOCK, prints_what_it_shows, steps
+
 ROOT = Path(__file__).parent.parent
 TUTORIAL = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
-BLOCK = re.compile(r'```(\w+)(?: title="([^"]+)")?\n(.*?)```', re.S)
+HOW_TOS = sorted((ROOT / "docs" / "how-to").glob("*.md"))
+
+#: Commands a page shows that a test cannot run, and why.
+NOT_RUN = {
+    "sandmod play": "opens a window and waits for its player",
+    "sandmod play examples/forest_fire.toml --scale 3": "opens a window and waits for its player",
+    "sandmod batch docs/sweeps/friction.toml -o friction-cluster --executor dask --scheduler tcp://scheduler:8786": "needs a Dask cluster",
+}
 
 
-def _run(command: str, folder: Path) -> subprocess.CompletedProcess:
-    """A command as a user types it, with this environment's sandmod and python first on the PATH."""
-    path = f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"
-    return subprocess.run(command, shell=True, cwd=folder, env={**os.environ, "PATH": path}, capture_output=True, text=True)
+def _copy_checkout(to: Path) -> Path:
+    shutil.copytree(ROOT, to, ignore=shutil.ignore_patterns(".git", ".venv", "venv", "build", "site", "*.egg-info", "__pycache__", ".*_cache", ".hypothesis"))
+    return to
+
+
+def follow(page: Path | str, folder: Path, env: dict[str, str], checkout: Path | None = None, installs: bool = True) -> dict[str, str]:
+    """Take a page's steps in ``folder``: write its files, run its commands and scripts with
+    ``env``, each of which must succeed and print what the page shows. ``pip install .``-style
+    commands run in ``checkout`` (the page says "from a checkout"), or are left out where not
+    ``installs``. Returns what each command printed."""
+    outputs: dict[str, str] = {}
+    for number, step in enumerate(steps(page)):
+        if step.kind == "file":
+            (folder / step.path).parent.mkdir(parents=True, exist_ok=True)
+            (folder / step.path).write_text(step.text, encoding="utf-8")
+        elif step.kind == "prints":
+            assert prints_what_it_shows(step.text, outputs[step.path]), f"{step.path} printed\n{outputs[step.path]}\nnot\n{step.text}"
+        elif step.kind == "command" and step.text not in NOT_RUN and (installs or not step.text.startswith("pip install")):
+            where = checkout if checkout and re.fullmatch(r'pip install "?\.(\[\w+\])?"?', step.text) else folder
+            outputs[step.text] = _run(step.text, where, env)
+        elif step.kind == "script":
+            script = folder.parent / f"{folder.name}-script-{number}.py"
+            script.write_text(step.text, encoding="utf-8")
+            outputs[step.text] = _run(f'python "{script}"', folder, env)
+    return outputs
+
+
+def _run(command: str, folder: Path, env: dict[str, str]) -> str:
+    done = subprocess.run(command, shell=True, cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    assert done.returncode == 0, f"{command} (in {folder}) exited {done.returncode}:\n{done.stdout}"
+    return done.stdout
+
+
+def _this_environment() -> dict[str, str]:
+    """This environment's sandmod and python first on the PATH."""
+    return {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
 
 
 def test_the_tutorial_runs_as_written(tmp_path):
-    outputs = {}
-    for language, title, body in BLOCK.findall(TUTORIAL):
-        if title:  # a file the reader writes
-            (tmp_path / title).parent.mkdir(parents=True, exist_ok=True)
-            (tmp_path / title).write_text(body, encoding="utf-8")
-        elif language == "bash":
-            for line in body.splitlines():
-                command = line.split(" #")[0].strip()
-                if not command or command.startswith("pip install"):  # installed already: it is what the tests run in
-                    continue
-                done = _run(command, tmp_path)
-                assert done.returncode == 0, f"{command}\n{done.stdout}\n{done.stderr}"
-                outputs[command] = done.stdout + done.stderr
-    _prints_what_the_page_says(outputs, tmp_path)
+    outputs = follow(ROOT / "docs" / "tutorial.md", tmp_path, _this_environment(), installs=False)
+    _prints_what_the_tutorial_says(outputs, tmp_path)
 
 
-def _prints_what_the_page_says(outputs: dict[str, str], folder: Path) -> None:
+def _prints_what_the_tutorial_says(outputs: dict[str, str], folder: Path) -> None:
     assert "snow:snow" in outputs["sandmod list"]
-    assert outputs["sandmod test snow"].splitlines()[:2] == ["snow:stays_frozen ... ok", "snow:melts_in_warm_water ... ok"]
-    shown = next(body for language, _, body in BLOCK.findall(TUTORIAL) if body.startswith("wrote snowfall.gif"))
-    assert outputs["sandmod render snowfall.toml"].split(" in ")[0] == shown.split(" in ")[0]
+    assert "2 passed" in outputs["python -m pytest mods/ -q"]
     assert (folder / "snowfall.gif").stat().st_size > 0
 
 
-@pytest.mark.slow
-def test_the_tutorial_runs_word_for_word_in_a_fresh_environment(tmp_path):
-    """As a new user runs it: a fresh virtual environment, sandmod installed from a copy of the
-    checkout (not editable), and every command of the page, pip's included, in a folder of its own."""
-    checkout, work, venv = tmp_path / "checkout", tmp_path / "work", tmp_path / "venv"
-    shutil.copytree(ROOT, checkout, ignore=shutil.ignore_patterns(".git", ".venv", "venv", "build", "site", "*.egg-info", "__pycache__", ".*_cache", ".hypothesis"))
+def test_the_pages_show_what_commands_print_and_name_what_is_not_run():
+    pages = [ROOT / "docs" / "tutorial.md", *HOW_TOS]
+    shown = [step for page in pages for step in steps(page)]
+    assert sum(step.kind == "prints" for step in shown) >= 4
+    assert sum(step.kind == "script" for step in shown) >= 1
+    commands = {step.text for step in shown if step.kind == "command"}
+    assert set(NOT_RUN) <= commands, set(NOT_RUN) - commands
+
+
+def test_every_piece_of_python_on_a_page_is_python():
+    """The pieces of a larger file (a plugin's hooks) are not run, but each must at least compile
+    (the Python reference's signatures are not statements)."""
+    for page in [ROOT / "README.md", *(ROOT / "docs").glob("*.md"), *HOW_TOS]:
+        for language, _, body in BLOCK.findall(page.read_text(encoding="utf-8")):
+            if language == "python":
+                compile(body, str(page), "exec")
+
+
+@dataclass
+class Fresh:
+    """A fresh virtual environment with sandmod installed (not editable) from a copy of the checkout."""
+
+    checkout: Path
+    env: dict[str, str]
+
+
+@pytest.fixture(scope="module")
+def fresh(tmp_path_factory) -> Fresh:
+    base = tmp_path_factory.mktemp("fresh")
+    checkout, venv = _copy_checkout(base / "checkout"), base / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
-    work.mkdir()
     scripts = venv / ("Scripts" if os.name == "nt" else "bin")
     env = {**{k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}, "VIRTUAL_ENV": str(venv),
            "PATH": f"{scripts}{os.pathsep}{os.environ.get('PATH', '')}"}
-    outputs = {}
-    for language, title, body in BLOCK.findall(TUTORIAL):
-        if title:
-            (work / title).parent.mkdir(parents=True, exist_ok=True)
-            (work / title).write_text(body, encoding="utf-8")
-        elif language == "bash":
-            for line in body.splitlines():
-                command = line.split(" #")[0].strip()
-                if command:
-                    folder = checkout if command == "pip install ." else work  # the page: from a checkout, then a folder of your own
-                    done = subprocess.run(command, shell=True, cwd=folder, env=env, capture_output=True, text=True)
-                    assert done.returncode == 0, f"{command}\n{done.stdout}\n{done.stderr}"
-                    outputs[command] = done.stdout + done.stderr
-    assert str(venv) in subprocess.run(["python", "-c", "import sandmod; print(sandmod.__file__)"], env=env, capture_output=True, text=True).stdout
-    assert "2 passed" in outputs["python -m pytest mods/ -q"]
-    _prints_what_the_page_says(outputs, work)
+    _run("pip install -q .", checkout, env)
+    assert str(venv) in _run('python -c "import sandmod; print(sandmod.__file__)"', base, env)
+    return Fresh(checkout, env)
+
+
+@pytest.mark.slow
+def test_the_tutorial_runs_word_for_word_in_a_fresh_environment(fresh, tmp_path):
+    """As a new user runs it: every command of the page, pip's included, in a folder of its own."""
+    outputs = follow(ROOT / "docs" / "tutorial.md", tmp_path, fresh.env, checkout=fresh.checkout)
+    _prints_what_the_tutorial_says(outputs, tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [page for page in HOW_TOS if any(step.kind != "file" for step in steps(page))], ids=lambda page: page.stem)
+def test_each_how_to_runs_word_for_word_in_a_fresh_environment(fresh, page, tmp_path):
+    """A how-to's commands run in a checkout of its own, as the how-tos say."""
+    follow(page, _copy_checkout(tmp_path / "checkout"), fresh.env, checkout=None)
 
 
 def test_the_tutorials_example_of_a_mistake_is_what_validate_says(tmp_path):
     mod = next(body for _, title, body in BLOCK.findall(TUTORIAL) if title == "mods/snow.toml")
     (tmp_path / "mods").mkdir()
     (tmp_path / "mods" / "snow.toml").write_text(mod.replace("density = 300 ", "density = -300"), encoding="utf-8")
-    done = _run("sandmod validate mods/", tmp_path)
+    done = subprocess.run("sandmod validate mods/", shell=True, cwd=tmp_path, env=_this_environment(), capture_output=True, text=True)
     shown = next(body for language, _, body in BLOCK.findall(TUTORIAL) if body.startswith("mods/snow.toml:"))
     assert done.returncode == 2 and done.stdout + done.stderr == shown
 
