@@ -18,6 +18,7 @@ from pages import BLOCK, prints_what_it_shows, steps
 ROOT = Path(__file__).parent.parent
 TUTORIAL = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
 HOW_TOS = sorted((ROOT / "docs" / "how-to").glob("*.md"))
+GALLERY = sorted(page for page in (ROOT / "docs" / "gallery").glob("*.md") if page.stem != "index")
 
 #: Commands a page shows that a test cannot run, and why.
 NOT_RUN = {
@@ -123,9 +124,10 @@ def test_the_tutorial_runs_word_for_word_in_a_fresh_environment(fresh, tmp_path)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("page", [page for page in HOW_TOS if any(step.kind != "file" for step in steps(page))], ids=lambda page: page.stem)
-def test_each_how_to_runs_word_for_word_in_a_fresh_environment(fresh, page, tmp_path):
-    """A how-to's commands run in a checkout of its own, as the how-tos say."""
+@pytest.mark.parametrize("page", [page for page in HOW_TOS + GALLERY if any(step.kind != "file" for step in steps(page))],
+                         ids=lambda page: f"{page.parent.name}/{page.stem}")
+def test_each_how_to_and_gallery_page_runs_word_for_word_in_a_fresh_environment(fresh, page, tmp_path):
+    """A page's commands run in a checkout of its own, as the how-tos and the gallery say."""
     follow(page, _copy_checkout(tmp_path / "checkout"), fresh.env, checkout=None)
 
 
