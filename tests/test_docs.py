@@ -1,5 +1,5 @@
-"""The docs are true word for word: the tutorial and each how-to run as written (their files
-written, their commands and scripts run, in order) and print what they say."""
+"""The docs are true word for word: the tutorial, each how-to and each gallery page run as written
+(their files written, their commands and scripts run, in order) and print what they say."""
 
 from __future__ import annotations
 
