@@ -139,3 +139,11 @@ def test_every_example_a_model_gives_is_a_value_its_field_takes():
                         TypeAdapter(kind).validate_python(example)
                         checked += 1
     assert checked >= 60
+
+
+@pytest.mark.parametrize("kind", ["mod", "world", "sweep"])
+def test_every_link_within_a_file_reference_lands_on_an_anchor_of_it(kind):
+    text = reference.file_reference(kind)
+    anchors = set(re.findall(r'id="([^"]+)"', text)) | set(re.findall(r"\{#([^}]+)\}", text))
+    links = re.findall(r"\]\(#([^)]+)\)", text)
+    assert links and sorted(set(links) - anchors) == []

@@ -134,6 +134,11 @@ def _row(name: str, field: FieldInfo, where: str = "") -> str:
     return f"| {anchor}`{name}` | {_written_type(field)} | {_default(field)} | {allowed} | {description} |"
 
 
+def table_id(key: str) -> str:
+    """The anchor of the section of the table written ``key`` (``[timeline.paint]``): ``table-timeline-paint``."""
+    return "table-" + re.sub(r"[^a-z0-9]+", "-", key.lower()).strip("-")
+
+
 def anchor_id(where: str, name: str) -> str:
     """The anchor of field ``name`` of the table at ``where`` (``elements.NAME.powder``): ``elements-name-powder-density``."""
     return re.sub(r"[^a-z0-9]+", "-", f"{where}.{name}".lower()).strip("-")
@@ -156,7 +161,8 @@ def _example_cell(where: str, name: str, field: FieldInfo) -> str:
     if _models_in(field.annotation):
         key = _key_of(name, field.annotation)
         parent = where.rpartition("]")[0] + "]" if "]" in where else ""
-        return f"`{_inside(parent, key) if parent and not where.startswith('shape.') else key}`"
+        key = _inside(parent, key) if parent and not where.startswith("shape.") else key
+        return f"[`{key}`](#{table_id(key)})"
     return ""
 
 
@@ -286,7 +292,7 @@ def _shaped(title: str, models: list[type[BaseModel]]) -> list[str]:
 
 def _shapes_section() -> list[str]:
     """Every shape's own fields, once."""
-    out = ["## Shapes", "", "The tables drawn in a shape (`[[scene]]`, `[[emitters]]`, a timeline's `paint`, `erase`,",
+    out = ["## Shapes {#shapes}", "", "The tables drawn in a shape (`[[scene]]`, `[[emitters]]`, a timeline's `paint`, `erase`,",
            "`heat` and `launch`) take one of these, by its `shape`, and add their own fields.", ""]
     for shape in _shape_models():
         value = _shape_value(shape)
@@ -298,7 +304,7 @@ def _shapes_section() -> list[str]:
 def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]:
     """A section for the table at ``title``: one model, or the variants of a union (fields common to
     all of them listed once), then a section for each table nested in them."""
-    out = [f"### `{title}`", ""]
+    out = [f"### `{title}` {{#{table_id(title)}}}", ""]
     if len(models) == 1 and inspect.getdoc(models[0]):
         out += [_markdown(inspect.getdoc(models[0])), ""]
     if len(models) == 1:
