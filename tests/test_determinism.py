@@ -55,23 +55,3 @@ def test_hash_spreads_evenly():
     rolls = hashing.cell_hash(hashing.frame_key(1, 2, 3), np.arange(100000, dtype=np.uint64) % 300, np.arange(100000, dtype=np.uint64) // 300)
     counts = np.bincount((rolls >> 28).astype(np.int64), minlength=16)
     assert counts.min() > 100000 / 16 * 0.9
-
-
-@pytest.mark.slow  # compiles the kernel anew
-def test_compiled_kernels_are_cached_outside_the_package(tmp_path):
-    import os
-    import subprocess
-    import sys
-
-    import sandmod
-
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"} | {"XDG_CACHE_HOME": str(tmp_path)}
-    code = (
-        "from sandmod.world.loading import load_world; import sys;"
-        f"w = load_world({str(EXAMPLES / 'hourglass.toml')!r}).world; w.step()"
-    )
-    subprocess.run([sys.executable, "-c", code], check=True, env=env)
-    cached = list((tmp_path / "sandmod" / "numba").rglob("*.nbi"))
-    assert any("kernel.step" in p.name for p in cached)
-    package = Path(sandmod.__file__).parent
-    assert not list(package.rglob("*.nbi"))

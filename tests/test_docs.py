@@ -109,8 +109,10 @@ def fresh(tmp_path_factory) -> Fresh:
     checkout, venv = _copy_checkout(base / "checkout"), base / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
     scripts = venv / ("Scripts" if os.name == "nt" else "bin")
-    env = {**{k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}, "VIRTUAL_ENV": str(venv),
-           "PATH": f"{scripts}{os.pathsep}{os.environ.get('PATH', '')}"}
+    env = {**{k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "NUMBA_CACHE_DIR")}, "VIRTUAL_ENV": str(venv),
+           "PATH": f"{scripts}{os.pathsep}{os.environ.get('PATH', '')}",
+           "XDG_CACHE_HOME": str(base / "cache"),  # compiled kernels of a copy that is gone after the tests: not in the user's cache
+           "PIP_CACHE_DIR": os.environ.get("PIP_CACHE_DIR") or str(Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pip")}
     _run("pip install -q .", checkout, env)
     assert str(venv) in _run('python -c "import sandmod; print(sandmod.__file__)"', base, env)
     return Fresh(checkout, env)
@@ -178,3 +180,14 @@ def test_the_sweep_in_the_batch_how_to_is_the_one_in_the_repository():
     shown = next(body for language, _, body in BLOCK.findall(page) if language == "toml" and "[sweep]" in body)
     sweep = ROOT / "docs" / "sweeps" / "friction.toml"
     assert TomlSource.parse(shown, "batch.md").data == TomlSource.read(sweep).data
+
+
+@pytest.mark.slow
+def test_a_fresh_install_keeps_its_compiled_kernels_in_the_users_cache_not_in_the_package(fresh, tmp_path):
+    """Files pip did not install would outlive an uninstall (and shadow a later editable install)."""
+    step = 'import sandmod; sandmod.load_world("examples/hourglass.toml").world.step()'
+    _run(f"python -c '{step}'", fresh.checkout, fresh.env)
+    cached = list((Path(fresh.env["XDG_CACHE_HOME"]) / "sandmod" / "numba").rglob("*.nbi"))
+    assert any("kernel.step" in path.name for path in cached)
+    package = Path(_run('python -c "import sandmod; print(sandmod.__file__)"', tmp_path, fresh.env).strip()).parent
+    assert package.is_relative_to(fresh.env["VIRTUAL_ENV"]) and not list(package.rglob("*.nbi"))
