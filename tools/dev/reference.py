@@ -134,14 +134,18 @@ def _row(name: str, field: FieldInfo, where: str = "") -> str:
     return f"| {anchor}`{name}` | {_written_type(field)} | {_default(field)} | {allowed} | {description} |"
 
 
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
+
+
 def table_id(key: str) -> str:
     """The anchor of the section of the table written ``key`` (``[timeline.paint]``): ``table-timeline-paint``."""
-    return "table-" + re.sub(r"[^a-z0-9]+", "-", key.lower()).strip("-")
+    return f"table-{_slug(key)}"
 
 
 def anchor_id(where: str, name: str) -> str:
     """The anchor of field ``name`` of the table at ``where`` (``elements.NAME.powder``): ``elements-name-powder-density``."""
-    return re.sub(r"[^a-z0-9]+", "-", f"{where}.{name}".lower()).strip("-")
+    return _slug(f"{where}.{name}")
 
 
 def _table(fields: dict[str, FieldInfo], where: str = "") -> list[str]:
