@@ -151,6 +151,24 @@ def test_every_image_in_the_docs_exists_and_says_how_it_was_made():
             assert made, f"{page.name}: no command says how {image} was made"
 
 
+FIGURE = re.compile(r"sandmod (?:render|palette)[^`\n]*-o (docs/images/[a-z_]+\.(?:webp|png))")
+
+
+def test_every_figure_of_a_world_is_what_its_command_makes_now(tmp_path):
+    """The pages' figures drawn by sandmod (the example worlds' animations, the palette) are current:
+    each command, run again into another folder, draws the same pixels, frame for frame."""
+    from PIL import Image, ImageSequence
+
+    commands = {match.group(0): match.group(1) for page in [ROOT / "README.md", *(ROOT / "docs").rglob("*.md")]
+                for match in FIGURE.finditer(page.read_text(encoding="utf-8"))}
+    assert len(set(commands.values())) >= 12
+    for command, figure in commands.items():
+        _run(command.replace("docs/images/", f"{tmp_path}/") + " -q" * ("render" in command), ROOT, _this_environment())
+        with Image.open(ROOT / figure) as shown, Image.open(tmp_path / Path(figure).name) as made:
+            frames = [[f.convert("RGB").tobytes() for f in ImageSequence.Iterator(image)] for image in (shown, made)]
+        assert frames[0] == frames[1], f"{figure} is not what the code draws now: run {command}"
+
+
 def test_every_world_and_mod_in_the_how_tos_that_is_whole_validates():
     """A how-to's TOML block with a [world] or [mod] table is a whole file: it must be a valid one."""
     from pydantic import ValidationError
