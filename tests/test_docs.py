@@ -69,6 +69,17 @@ def _this_environment() -> dict[str, str]:
 def test_the_tutorial_runs_as_written(tmp_path):
     outputs = follow(ROOT / "docs" / "tutorial.md", tmp_path, _this_environment(), installs=False)
     _prints_what_the_tutorial_says(outputs, tmp_path)
+    shown = re.search(r"\*`(sandmod render snowfall.toml -o snowfall.webp)`", TUTORIAL).group(1)
+    _run(shown, tmp_path, _this_environment())
+    assert _frames(tmp_path / "snowfall.webp") == _frames(ROOT / "docs" / "images" / "snowfall.webp"), f"docs/images/snowfall.webp is not what {shown} draws now"
+
+
+def _frames(path: Path) -> list[bytes]:
+    """An image's frames as RGB pixels."""
+    from PIL import Image, ImageSequence
+
+    with Image.open(path) as image:
+        return [frame.convert("RGB").tobytes() for frame in ImageSequence.Iterator(image)]
 
 
 def _prints_what_the_tutorial_says(outputs: dict[str, str], folder: Path) -> None:
@@ -157,16 +168,12 @@ FIGURE = re.compile(r"sandmod (?:render|palette)[^`\n]*-o (docs/images/[a-z_]+\.
 def test_every_figure_of_a_world_is_what_its_command_makes_now(tmp_path):
     """The pages' figures drawn by sandmod (the example worlds' animations, the palette) are current:
     each command, run again into another folder, draws the same pixels, frame for frame."""
-    from PIL import Image, ImageSequence
-
     commands = {match.group(0): match.group(1) for page in [ROOT / "README.md", *(ROOT / "docs").rglob("*.md")]
                 for match in FIGURE.finditer(page.read_text(encoding="utf-8"))}
     assert len(set(commands.values())) >= 12
     for command, figure in commands.items():
         _run(command.replace("docs/images/", f"{tmp_path}/") + " -q" * ("render" in command), ROOT, _this_environment())
-        with Image.open(ROOT / figure) as shown, Image.open(tmp_path / Path(figure).name) as made:
-            frames = [[f.convert("RGB").tobytes() for f in ImageSequence.Iterator(image)] for image in (shown, made)]
-        assert frames[0] == frames[1], f"{figure} is not what the code draws now: run {command}"
+        assert _frames(ROOT / figure) == _frames(tmp_path / Path(figure).name), f"{figure} is not what the code draws now: run {command}"
 
 
 def test_every_world_and_mod_in_the_how_tos_that_is_whole_validates():
