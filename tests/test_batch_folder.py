@@ -127,3 +127,23 @@ def test_ctrl_c_while_a_command_loads_is_a_quiet_exit_130(tmp_path):
         child.send_signal(signal.SIGINT)
         _, err = child.communicate(timeout=60)
         assert "Traceback" not in err and child.returncode in (130, 2), (delay, err)
+
+
+def test_ctrl_c_while_the_formats_load_is_noted_and_loading_finishes_whole():
+    """Raised inside pydantic building a validator, a KeyboardInterrupt is swallowed and leaves the
+    validator broken (CI once saw good bundled mods refused); so while the command line loads, Ctrl-C
+    is only noted, and the command exits 130 once loading is done."""
+    code = (
+        "import importlib.abc, signal, sys\n"
+        "class Interrupt(importlib.abc.MetaPathFinder):\n"
+        "    def find_spec(self, name, path, target=None):\n"
+        "        if name == 'sandmod.formats.modspec':\n"
+        "            signal.raise_signal(signal.SIGINT)\n"
+        "sys.meta_path.insert(0, Interrupt())\n"
+        "from sandmod.tools.entry import _load_interrupted\n"
+        "print(_load_interrupted())\n"
+        "from sandmod.world.loading import load_ruleset\n"
+        "print(len(load_ruleset().elements) > 10)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "True\nTrue\n", "")

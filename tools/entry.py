@@ -20,9 +20,22 @@ def main() -> None:
     for name in ("SIGTERM", "SIGHUP"):
         if hasattr(signal, name) and signal.getsignal(getattr(signal, name)) is signal.SIG_DFL:
             signal.signal(getattr(signal, name), leave)
-    try:
-        from .cli import cli
-    except KeyboardInterrupt:
+    if _load_interrupted():
         sys.stderr.write("interrupted\n")
         sys.exit(EXIT_INTERRUPTED)
+    from .cli import cli
+
     cli(prog_name="sandmod")
+
+
+def _load_interrupted() -> bool:
+    """Import the command line with Ctrl-C noted rather than raised: pydantic builds its validators
+    as the file formats load, and a KeyboardInterrupt raised inside that is swallowed (printed as
+    "Exception ignored") and leaves a broken validator behind, which then refuses good files."""
+    noted: list[int] = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
+    try:
+        from . import cli  # noqa: F401
+    finally:
+        signal.signal(signal.SIGINT, before)
+    return bool(noted)
