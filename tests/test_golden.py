@@ -18,17 +18,17 @@ from test_chunks import digest
 
 #: (scene, side of the world): digest after 160 frames. The larger world has more cells than
 #: ``layout.CACHED_CELLS``, so the kernel asks for rows ahead of their use there (a hint that must
-#: change nothing). Recorded anew when fluids came to trade places by plume blocks (one roll for
-#: a block of cells) with the run of fallers behind a sinker following it (no comb, no static),
-#: a sinker knocks only the grains diagonally above it, and only with no run following it, and
-#: water and steam got latent heat and a boiling spread.
+#: change nothing). Recorded anew when a resting grain came to slump into a fluid diagonally below
+#: it (the hourglass ran out), a liquid to sink into a lighter powder, the gas behind a rising gas
+#: to follow it in its run and a gas to waver by its plume block's roll (no comb), and lava to set
+#: into falling basalt instead of static stone.
 GOLDEN = {
-    ("mix", 96): "708346bec7269e98b87259a5ff4c5c073098319530850b7e1082da4c43a2fe3f",
-    ("halves", 96): "52369b16d9fcb81ef7445f9bb5352e33ec7211853d3f82a6442e9bf0da2a53ca",
-    ("everything", 96): "7aec63bb4013d9e8a3af362f6bd2a3bca4e43d4126cd300cd9890c3b6d78d154",
-    ("mix", 272): "4bf3098a29e163ffa4a1f18766515ec09bf9098f569e7820ffb00f47de6f3c01",
-    ("halves", 272): "a102bf1a5e5af83aaedd423e4e8b3fbf63bbeb05a017c7b27861db66565a443d",
-    ("everything", 272): "1eb2aa21da3250888c44461d36b1119153658a7e6ad153ac4d3d52e77ec33bb0",
+    ("mix", 96): "0d54785dd69e3ed8565bdf93146a33013116c3d8b55fca31bcb972ad7cb12783",
+    ("halves", 96): "9b84613b83c7151113b97fb91b271dd862efd902a783cfccdd45156f9e903a08",
+    ("everything", 96): "ca89836f9a40eb52d99cb0c52c31a4424b353c03dc93ef9c180580736b66e74c",
+    ("mix", 272): "671a872c790651533e809632ed0eb002bfa46e916a684e1af521f1e804bf9955",
+    ("halves", 272): "64916ab6b869ea20b80edbbc6324e14007f921db1d0b29e0fba652652647fb61",
+    ("everything", 272): "af03d4063c5b74ba98727d90fd938f6d176bcf5ecee8ccc54a814050e777b55e",
 }
 
 

@@ -43,7 +43,7 @@ from .fire import heat_and_fire
 from .heat import conduct
 from .jit import compiled, in_place, inlined, numba, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
-from .moves import fluid_near, knock, move, sink_run
+from .moves import fluid_near, knock, move, sink_run, slump_side
 from .paint import paint_cells  # noqa: F401
 from .prefetch import prefetch
 from .reactions import lifetime, react
@@ -156,6 +156,8 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key,
             opens = _enterable(t.displace[e, below], below, flags[_at(ty, x)])
         if not opens:
             if (f & LOOSE) == 0 and not sliding:
+                if slump_side(cells, t.displace, e, x, y, ty, 1) != 0:
+                    break  # at rest beside a fluid diagonally below: it slumps into it
                 n += 1  # at rest on the ground: stays put
                 continue
             if not _boxed_in(cells, t.displace, e, x, y, ty):

@@ -65,6 +65,7 @@ MIN_SLIDE = SUBCELL // 4
 STOP_SPEED = SUBCELL // 8
 KNOCK_SPEED = SUBCELL // 2  # sideways speed of a grain knocked loose
 SALT_ROUND = 0x165667B1
+SALT_WAVER = 0x7A3B9C5D
 OPEN, SHUT, WAIT = 0, 1, 2  # a move's first cell (see _way_into): go; no; not this frame, try again
 
 
@@ -136,6 +137,27 @@ def fluid_near(cells, x, y, g):
     return near
 
 
+@inlined
+def slump_side(cells, displace, e, x, y, ty, first):
+    """A grain of element e resting at (x, y) that cannot fall into (x, ty): the side (-1 or 1,
+    ``first`` looked at first) where a fluid it sinks into lies diagonally below it, past a side
+    cell it may also enter (empty, or such a fluid); 0 where there is none. In the air a grain at
+    rest stays put until knocked (its inertial resistance); in a liquid it slumps, so a column of
+    grains standing in water falls into a heap, and the water passes down beside it."""
+    height, width = cells.shape
+    if not _within(ty, height):
+        return 0
+    side = first
+    for _ in range(2):
+        nx = x + side
+        if _within(nx, width):
+            o = cells[_at(ty, nx)]
+            if o != 0 and displace[e, o] != 0 and displace[e, cells[_at(y, nx)]] != 0:
+                return side
+        side = -side
+    return 0
+
+
 @compiled
 def particle_moves(h, accel, keep, max_speed, cvx, cvy):
     """A particle in flight: gravity, drag (``keep`` of 256 kept), its speed clamped; the move is
@@ -151,16 +173,20 @@ def particle_moves(h, accel, keep, max_speed, cvx, cvy):
 
 
 @compiled
-def falling_moves(h, kind, g, accel, max_speed, cvx, cvy):
-    """Falling (rising): speed up, go at least one cell, drift sideways (a gas wavers as it rises:
-    a plume, not a line). Returns the first move (dx, dy) and the new vertical velocity; the
-    second move, if the drift is blocked, is straight on, one cell."""
+def falling_moves(h, waver, kind, g, accel, max_speed, cvx, cvy):
+    """Falling (rising): speed up, go at least one cell, drift sideways. A gas wavers as it rises,
+    by ``waver``, a roll shared by the cells of its plume block (see :data:`~.layout.PLUME`): a
+    cloud billows in puffs, neither a line nor static; a waver is one diagonal step, so that the
+    gas behind it can follow (see :func:`follow_run`). Returns the first move (dx, dy) and the new
+    vertical velocity; the second move, if the drift is blocked, is straight on, one cell."""
     r = _mix32(h ^ SALT_ROUND)
     speed = min(cvy * g + accel, max_speed)
     dx = _cells_moved(cvx, (r >> 8) & 255)
-    if kind == GAS and (r & 0x10000) != 0:
-        dx += 1 if (r & 0x20000) != 0 else -1
-    return dx, g * max(1, _cells_moved(speed, r & 255)), speed * g
+    dy = g * max(1, _cells_moved(speed, r & 255))
+    if kind == GAS and (waver & 0x10000) != 0:
+        dx += 1 if (waver & 0x20000) != 0 else -1
+        dy = g
+    return dx, dy, speed * g
 
 
 @compiled
@@ -344,22 +370,13 @@ def knock(s, t, x, y, px, py, knock_key, first, last):
 
 
 @inlined
-def sink_run(s, t, x, y, g, run_key, ambient):
-    """The faller at (x, y) sinks into the fluid below it (rises into the one above, for g = -1),
-    and the fallers behind it in its run of rows (see :data:`~.layout.PLUME_RUN`) that could
-    sink into that fluid too follow it, a cell each: the fluid rises through them to the run's
-    end, in one turn of the column. So a body of sand sinks into water as a whole, the water
-    rising through it in channels, with no comb of alternating rows. The run stops at a cell
-    done this frame or with work of its own due; the followers are left at rest, as they were.
-    The lead's velocity and flags are the caller's to set. Returns the row the fluid ended at,
-    and whether the heat field changed (the fluid traded places with cells of another
-    temperature, or one of them cools: see :func:`~.heat.stirs`)."""
-    cells, flags, heat, shade, timer, vx, vy = s.cells, s.flags, s.heat, s.shade, s.timer, s.vx, s.vy
-    height = cells.shape[0]
-    ty = y + g
-    fluid = cells[_at(ty, x)]
-    end = min(max(_run_end(run_key, x, y, g), 0), height - 1)
-    fy = y  # where the fluid ends up
+def _run_last(s, t, x, y, g, fluid, run_key):
+    """The last row, from y going against g, of the movers behind row y in its run of rows (see
+    :data:`~.layout.PLUME_RUN`) that could move into ``fluid`` too: y where none could. The run
+    stops at a cell done this frame or with work of its own due."""
+    cells, flags, heat = s.cells, s.flags, s.heat
+    end = min(max(_run_end(run_key, x, y, g), 0), cells.shape[0] - 1)
+    fy = y
     while fy != end:
         ny = fy - g
         c = cells[_at(ny, x)]
@@ -369,11 +386,23 @@ def sink_run(s, t, x, y, g, run_key, ambient):
         if _restless(f, t.thermal[c], t.life_frames[c], heat[_at(ny, x)], t.cold_limit[c], t.hot_limit[c], t.ignite_limit[c]):
             break
         fy = ny
-    f_heat, f_cap, f_flags = int(heat[_at(ty, x)]), t.heat_cap[fluid], flags[_at(ty, x)]
-    f_shade, f_timer, f_vx, f_vy = shade[_at(ty, x)], timer[_at(ty, x)], vx[_at(ty, x)], vy[_at(ty, x)]
+    return fy
+
+
+@inlined
+def _shift_run(s, t, x, hole, last, g, lead, carried_vy, ambient):
+    """Each cell of column x from row ``hole`` - g back to row ``last`` moves a cell along g, and
+    what row ``hole`` held goes to row ``last``. The cell from row ``lead`` keeps its velocity and
+    flags (the caller's to set); the others are carried along, at rest but for ``carried_vy``. Returns whether the heat
+    field changed (cells of another temperature traded places, or one of them cools: see
+    :func:`~.heat.stirs`)."""
+    cells, flags, heat, shade, timer, vx, vy = s.cells, s.flags, s.heat, s.shade, s.timer, s.vx, s.vy
+    fluid = cells[_at(hole, x)]
+    f_heat, f_cap, f_flags = int(heat[_at(hole, x)]), t.heat_cap[fluid], flags[_at(hole, x)]
+    f_shade, f_timer, f_vx, f_vy = shade[_at(hole, x)], timer[_at(hole, x)], vx[_at(hole, x)], vy[_at(hole, x)]
     stir = _cooling_loss(f_heat, f_cap, t.cooling[fluid], ambient) != 0
-    r = ty
-    while r != fy:  # each faller from the lead back down (up) a cell, into row r
+    r = hole
+    while r != last:  # each mover from the lead back a cell along g, into row r
         q = r - g
         c = cells[_at(q, x)]
         h = int(heat[_at(q, x)])
@@ -382,18 +411,46 @@ def sink_run(s, t, x, y, g, run_key, ambient):
         heat[_at(r, x)] = h
         shade[_at(r, x)] = shade[_at(q, x)]
         timer[_at(r, x)] = timer[_at(q, x)]
-        if q != y:  # a follower: carried along at rest
+        if q != lead:  # a follower: carried along
             vx[_at(r, x)] = 0
-            vy[_at(r, x)] = 0
+            vy[_at(r, x)] = carried_vy
             flags[_at(r, x)] = MOVED | (flags[_at(q, x)] & CARRIED)
         r = q
-    cells[_at(fy, x)] = fluid
-    heat[_at(fy, x)] = f_heat
-    shade[_at(fy, x)] = f_shade
-    timer[_at(fy, x)] = f_timer
-    vx[_at(fy, x)] = f_vx
-    vy[_at(fy, x)] = f_vy
-    flags[_at(fy, x)] = MOVED | (f_flags & CARRIED)
+    cells[_at(last, x)] = fluid
+    heat[_at(last, x)] = f_heat
+    shade[_at(last, x)] = f_shade
+    timer[_at(last, x)] = f_timer
+    vx[_at(last, x)] = f_vx
+    vy[_at(last, x)] = f_vy
+    flags[_at(last, x)] = MOVED | (f_flags & CARRIED)
+    return stir
+
+
+@inlined
+def sink_run(s, t, x, y, g, run_key, ambient):
+    """The faller at (x, y) sinks into the fluid below it (rises into the one above, for g = -1),
+    and the fallers behind it in its run of rows (:func:`_run_last`) that could sink into that
+    fluid too follow it, a cell each: the fluid rises through them to the run's end, in one turn
+    of the column. So a body of sand sinks into water as a whole, the water rising through it in
+    channels, with no comb of alternating rows. The followers are left at rest, as they were;
+    the lead's velocity and flags are the caller's to set. Returns the row the fluid ended at,
+    and whether the heat field changed (see :func:`_shift_run`)."""
+    fy = _run_last(s, t, x, y, g, s.cells[_at(y + g, x)], run_key)
+    return fy, _shift_run(s, t, x, y + g, fy, g, y, 0, ambient)
+
+
+@inlined
+def follow_run(s, t, x, y, g, k, vy, run_key, ambient):
+    """A gas has just risen (sunk) out of (x, y), ``k`` cells straight on (1: it wavered): the gases
+    behind it in its run of rows that could move into what took its place follow it as far, as
+    the fallers behind a faller do (see :func:`sink_run`), at its velocity ``vy``. So a cloud rises
+    as a body, with no comb of alternating rows. Returns the last row of the run, and whether the heat field changed."""
+    fy = _run_last(s, t, x, y, g, s.cells[_at(y, x)], run_key)
+    if fy == y:
+        return y, False
+    stir = False
+    for j in range(k):  # a row at a time: each pass moves the run into the next cell the lead left
+        stir = _shift_run(s, t, x, y + g * j, fy + g * j, g, -1, vy, ambient) or stir
     return fy, stir
 
 
@@ -458,15 +515,22 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         if straight:
             d0y = g
         else:
-            d0x, d0y, cvy = falling_moves(h, kind, g, t.accel[e], t.max_speed[e], cvx, cvy)
+            waver = _plume_roll(_mix32(move_key ^ SALT_WAVER), x, y) if kind == GAS else 0
+            d0x, d0y, cvy = falling_moves(h, waver, kind, g, t.accel[e], t.max_speed[e], cvx, cvy)
             d1y = g  # if the drift is blocked: straight on, one cell
             tries = 2
     elif g > 0 and cvy > 0 and _within(ty, height) and vy[_at(ty, x)] > 0 and t.archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
         return True, False, np.int64(0), x, y, y  # the cell below falls too and has not had its turn (another tile's): wait for it
+    elif kind == GAS and _within(ty, height) and vy[_at(ty, x)] != 0 and t.fall_dir[cells[_at(ty, x)]] == g and t.archetype[cells[_at(ty, x)]] == GAS and (flags[_at(ty, x)] & DONE) == 0:
+        return True, False, np.int64(0), x, y, y  # the gas ahead rises (sinks) and has yet to move: wait to follow it (follow_run)
     elif kind == POWDER:
         if loose == 0:
-            return busy, False, np.int64(0), x, y, y  # resting: stays put until the cell below opens or it is knocked
-        tries, d0x, d0y, d1x, d2x, d2y, cvx, coasting = powder_moves(h, g, t.impact_share[e], t.max_speed[e], cvx, cvy)
+            d0x = slump_side(cells, t.displace, e, x, y, ty, 1 if h & 2 else -1)
+            if d0x == 0:
+                return busy, False, np.int64(0), x, y, y  # resting: stays put until the cell below opens or it is knocked
+            tries, d0y, cvx = 1, g, 0  # resting beside a fluid diagonally below: it slumps into it
+        else:
+            tries, d0x, d0y, d1x, d2x, d2y, cvx, coasting = powder_moves(h, g, t.impact_share[e], t.max_speed[e], cvx, cvy)
         cvy = 0
     else:
         cvx = cvy = 0
@@ -501,6 +565,9 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         # Heat stays even where two cells of one temperature trade places and neither cools.
         stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(py, px)]), t.heat_cap[entered], t.cooling[entered], ambient)
         swap(s, x, y, px, py, kind == PARTICLE)
+        if kind == GAS and py != y:  # a gas rose (sank): the gas behind it follows
+            ry, followed = follow_run(s, t, x, y, g, abs(py - y) if px == x else 1, cvy, exchange_key, ambient)
+            stir = stir or followed
     vx[_at(py, px)] = cvx
     vy[_at(py, px)] = cvy
     flags[_at(py, px)] = MOVED | loose | marks

@@ -358,9 +358,11 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
     (``base:empty``'s density). A mover may trade places with a fluid (liquid
     or gas) lighter than itself when falling, denser when rising, each frame
     by :func:`exchange_chance`, which grows with the gap in their densities.
-    Powders and liquids fall through the air (empty cells) freely; a gas at
-    rest starts to rise (or sink) through it by the same chance, so that a
-    cloud rises raggedly, not row by row.
+    A liquid also sinks into a lighter powder, seeping down between its
+    grains by that chance divided by one plus the powder's friction: mercury
+    ends up under sand. Powders and liquids fall through the air (empty
+    cells) freely; a gas at rest starts to rise (or sink) through it by the
+    same chance, so that a cloud rises raggedly, not row by row.
     """
     air = elements[0].spec.density
     densities = np.array([getattr(e.spec, "density", np.inf) for e in elements])
@@ -376,6 +378,10 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
             for b in np.flatnonzero(fluid):
                 if b != a:
                     t.displace[a, b] = exchange_chance(densities[a], densities[b], int(t.fall_dir[a]))
+            if t.archetype[a] == ARCHETYPE_CODES["liquid"]:
+                for b in np.flatnonzero(t.archetype == ARCHETYPE_CODES["powder"]):
+                    chance = exchange_chance(densities[a], densities[b], 1) / (1.0 + t.friction[b] / 256)
+                    t.displace[a, b] = max(1, round(chance)) if chance > 0 else 0
             gas = t.archetype[a] == ARCHETYPE_CODES["gas"]
             t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a]), INTO_AIR) if gas else ALWAYS
     t.displaces[:] = element_masks(t.displace)
