@@ -32,6 +32,7 @@ LEGEND = {
     "K": "smoke",
     "g": "glass",
     "a": "ash",
+    "B": "basalt",
 }
 
 

@@ -104,7 +104,8 @@ def uniform(ruleset, name, celsius, size=6):
     [
         ("water", 0, -1, "ice"),
         ("ice", 0, +1, "water"),
-        ("lava", 900, -1, "stone"),
+        ("lava", 900, -1, "basalt"),
+        ("basalt", 1200, +1, "lava"),
         ("stone", 1300, +1, "lava"),
         ("sand", 1100, +1, "glass"),
     ],
