@@ -15,6 +15,7 @@ text below its marker line is the generated part; write them anew with::
 from __future__ import annotations
 
 import functools
+import html
 import inspect
 import re
 import sys
@@ -262,7 +263,7 @@ def _markdown(docstring: str | None, whole: bool = False) -> str:
     """A docstring (its first paragraph unless ``whole``), its reStructuredText literals as Markdown's."""
     text = (docstring or "") if whole else (docstring or "").split("\n\n")[0]
     text = re.sub(r"(?:^|\n\n)::\n\n", "\n\nFor example::\n\n", text).lstrip("\n")  # a literal block with no sentence before it
-    text = re.sub(r"::\n\n((?:    .*\n?|\n)+)", lambda m: ":\n\n```\n" + textwrap.dedent(m.group(1)).strip("\n") + "\n```\n", text)
+    text = re.sub(r"::\n\n((?:    .*\n?|\n)+)", lambda m: ":\n\n```\n" + textwrap.dedent(m.group(1)).strip("\n") + "\n```\n\n", text)
     return re.sub(r"``(.+?)``", r"`\1`", re.sub(r":\w+:`~?([^`]+)`", r"`\1`", text))
 
 
@@ -423,10 +424,40 @@ def cli_reference() -> str:
 # --- the Python API ---------------------------------------------------------------------------
 
 
-#: Parameters that are the engine's business, not the caller's: left out.
-_INTERNAL_PARAMETERS = ("salt",)
+#: Parameters that are the engine's or the command line's business, not the caller's: left out.
+_INTERNAL_PARAMETERS = ("salt", "registry")
 #: Classes sandmod makes (load_world, load_ruleset), never the caller: no constructor shown.
 _MADE_BY_SANDMOD = ("LoadedWorld", "Ruleset")
+#: Types documented on another page of the reference, and where.
+_DOCUMENTED_ELSEWHERE = {"WorldFile": "world-files.md"}
+
+
+def _public_names() -> list[tuple[str, Any]]:
+    """Each name the page documents, as the reader imports it, and its value: ``import sandmod``'s, then ``sandmod.api``'s."""
+    import sandmod
+    from sandmod import api
+
+    return [(f"sandmod.{n}", getattr(sandmod, n)) for n in sandmod.__all__ if n != "__version__"] + [
+        (f"sandmod.api.{n}", getattr(api, n)) for n in api.__all__
+    ]
+
+
+@functools.cache
+def _type_links() -> dict[str, str]:
+    """Each type the reference documents, by the name signatures call it, and the link to its entry (the first, where two import it)."""
+    links = dict(_DOCUMENTED_ELSEWHERE)
+    for name, thing in reversed(_public_names()):
+        short = name.rsplit(".", 1)[-1]
+        if inspect.isclass(thing) or typing.get_origin(thing) is not None:
+            links[short] = f"#{_slug(name)}"
+    return links
+
+
+def _code(text: str) -> str:
+    """Python as HTML code, each type the reference documents a link to its entry."""
+    links = _type_links()
+    pattern = r"(?<![\w.])(" + "|".join(map(re.escape, sorted(links, key=len, reverse=True))) + r")\b"
+    return re.sub(pattern, lambda m: f'<a href="{links[m[1]]}">{m[1]}</a>', html.escape(text, quote=False))
 
 
 def _signature(thing: Any) -> str:
@@ -436,72 +467,151 @@ def _signature(thing: Any) -> str:
         return ""  # a marker used as @hookimpl, an alias of a type
     if inspect.isclass(thing) and (getattr(thing, "_is_protocol", False) or thing.__name__ in _MADE_BY_SANDMOD):
         return ""
+    if inspect.isclass(thing) and issubclass(thing, BaseModel):
+        return "(*, " + ", ".join(f"{name}: {kind}" + (f" = {default}" if default else "") for name, kind, default in _model_fields(thing)) + ")"
     try:
         signature = inspect.signature(thing)
     except (TypeError, ValueError):
         return ""
     parameters = [p for name, p in signature.parameters.items() if name != "self" and not name.startswith("_") and name not in _INTERNAL_PARAMETERS]
     text = str(signature.replace(parameters=parameters)).replace("<factory>", "...").replace('"', "")
+    text = re.sub(r"ForwardRef\(([^)]*)\)", r"\1", text)  # a named tuple's
     return re.sub(r"(?<!= )'([A-Za-z_][^']*)'", r"\1", text)  # quoted annotations, not string defaults
 
 
-def _attribute_doc(module: types.ModuleType, name: str) -> str:
-    """The ``#:`` comment above ``name = ...`` in ``module``'s source (an alias or a marker)."""
-    lines = inspect.getsource(module).splitlines()
+def _model_fields(model: type[BaseModel]) -> list[tuple[str, str, str]]:
+    """A pydantic model's fields as its constructor takes them: (name, type, default or empty when required)."""
+    return [
+        (field.alias or name, _python_type(field.annotation), "" if field.is_required() else repr(field.get_default(call_default_factory=True)))
+        for name, field in model.model_fields.items()
+    ]
+
+
+def _source_line(lines: list[str], name: str, indent: str = "") -> tuple[int, str] | None:
+    """The line (number, text) that gives ``name`` a value or a type at ``indent``."""
     for number, line in enumerate(lines):
-        if re.match(rf"{name}\s*(:[^=]*)?=", line):
-            comments = []
-            for above in reversed(lines[:number]):
-                if not above.startswith("#:"):
-                    break
-                comments.insert(0, above[2:].strip())
-            return " ".join(comments)
-    return ""
+        if re.match(rf"{indent}{name}\s*[:=]", line):
+            return number, line
+    return None
 
 
-def _entry(title: str, thing: Any, text: str, level: str = "###") -> list[str]:
-    """A heading with the name alone, the signature as code below it, then the text."""
-    signature = _signature(thing)
-    out = [f"{level} `{title}`", ""]
-    if signature:
-        kind = "class " if inspect.isclass(thing) else ""
-        out += ["```python", f"{kind}{title.rsplit('.', 1)[-1]}{signature}", "```", ""]
+def _comment(lines: list[str], name: str, indent: str = "") -> str:
+    """The ``#:`` comment above ``name``'s line, or else the comment at its end."""
+    found = _source_line(lines, name, indent)
+    if found is None:
+        return ""
+    number, line = found
+    above = []
+    for previous in reversed(lines[:number]):
+        if not previous.strip().startswith("#:"):
+            break
+        above.insert(0, previous.strip()[2:].strip())
+    return " ".join(above) or (line.split("  # ", 1)[1].strip() if "  # " in line else "")
+
+
+def _defined_in(name: str, thing: Any) -> types.ModuleType | None:
+    """The sandmod module whose source gives ``name`` its value (an alias or a marker)."""
+    for module in [m for key, m in sorted(sys.modules.items()) if key.startswith("sandmod.") and key != "sandmod.api"]:
+        if getattr(module, name, None) is thing and _source_line(inspect.getsource(module).splitlines(), name):
+            return module
+    return None
+
+
+def _alias(name: str, thing: Any) -> tuple[str, str]:
+    """An alias of a type or a marker: its definition as code (for an alias) and its ``#:`` text."""
+    short = name.rsplit(".", 1)[-1]
+    module = _defined_in(short, thing)
+    lines = inspect.getsource(module).splitlines() if module else []
+    code = _source_line(lines, short)[1].replace('"', "") if module and typing.get_origin(thing) is not None else ""
+    return code, _comment(lines, short)
+
+
+def _python_type(annotation: Any) -> str:
+    """A type as Python source writes it, its validation rules (``Annotated``) left out."""
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if isinstance(annotation, (str, typing.ForwardRef)):
+        return getattr(annotation, "__forward_arg__", annotation).strip("'\"")
+    if isinstance(annotation, list):  # a Callable's arguments
+        return "[" + ", ".join(map(_python_type, annotation)) + "]"
+    if origin is Annotated:
+        return _python_type(args[0])
+    if origin in (Union, types.UnionType):
+        return " | ".join(map(_python_type, args))
+    if origin is Literal:
+        return f"Literal[{', '.join(map(repr, args))}]"
+    if origin is not None:
+        return f"{_python_type(origin)}[{', '.join(map(_python_type, args))}]"
+    names = {type(None): "None", Ellipsis: "..."}
+    return names.get(annotation) or getattr(annotation, "__name__", None) or str(annotation).replace("typing.", "")
+
+
+def _attributes(cls: type) -> list[tuple[str, str, str]]:
+    """A class's public attributes and properties: (name, type, a line of text), in the order its
+    source gives them. The text of an annotated name is its pydantic description or its comment."""
+    found: dict[str, tuple[str, str]] = {}
+    for klass in [k for k in reversed(cls.__mro__) if k.__module__.startswith("sandmod")]:
+        lines = inspect.getsource(klass).splitlines()
+        fields = getattr(klass, "model_fields", {})
+        for name, annotation in vars(klass).get("__annotations__", {}).items():
+            if not name.startswith("_") and typing.get_origin(annotation) is not typing.ClassVar:
+                text = fields[name].description if name in fields and fields[name].description else _comment(lines, name, "    ")
+                found[name] = (_python_type(fields[name].annotation if name in fields else annotation), text)
+        for name, value in vars(klass).items():
+            if isinstance(value, property) and not name.startswith("_"):
+                found[name] = (_python_type(inspect.signature(value.fget).return_annotation), _markdown(inspect.getdoc(value)))
+    return [(name, kind, " ".join(text.split())) for name, (kind, text) in found.items()]
+
+
+def _attribute_table(name: str, cls: type) -> list[str]:
+    """A class's attributes as a table, each row with an anchor of its own; nothing when it has none."""
+    rows = [
+        f'| <a id="{_slug(f"{name}.{attribute}")}"></a>`{attribute}` | <code>{_code(kind).replace("|", chr(92) + "|")}</code> | {_markdown(text).replace("|", chr(92) + "|")} |'
+        for attribute, kind, text in _attributes(cls)
+    ]
+    return ["| attribute | type | what |", "|---|---|---|", *rows, ""] if rows else []
+
+
+def _entry(title: str, code: str, text: str, level: str = "###") -> list[str]:
+    """A heading with the name alone and an anchor, the code (a signature) below it, then the text."""
+    out = [f"{level} `{title}` {{#{_slug(title)}}}", ""]
+    if code:
+        out += [f"<pre><code>{_code(code)}</code></pre>", ""]
     return out + [text.strip(), ""]
 
 
-def _documented(name: str, thing: Any, module: types.ModuleType | None = None) -> list[str]:
-    """The entry of a public name, and of a class's public methods and properties."""
-    own = getattr(thing, "__module__", "").startswith("sandmod") or inspect.isclass(thing)
-    text = _markdown(inspect.getdoc(thing), whole=True) if own and inspect.getdoc(thing) else ""
-    if not text and module is not None:
-        text = _attribute_doc(module, name.rsplit(".", 1)[-1])
-    out = _entry(name, thing, text)
+def _call(title: str, thing: Any) -> str:
+    """How a function or class is called, as code: ``name(arguments) -> result``; empty for what is not called."""
+    signature = _signature(thing)
+    kind = "class " if inspect.isclass(thing) else ""
+    return f"{kind}{title.rsplit('.', 1)[-1]}{signature}" if signature else ""
+
+
+def _documented(name: str, thing: Any) -> list[str]:
+    """The entry of a public name, and of a class's public attributes and methods."""
+    if not (inspect.isclass(thing) or inspect.isfunction(thing)):
+        return _entry(name, *_alias(name, thing))
+    out = _entry(name, _call(name, thing), _markdown(inspect.getdoc(thing), whole=True))
     if inspect.isclass(thing) and thing.__module__.startswith("sandmod"):
+        out += _attribute_table(name, thing)
         for member, value in vars(thing).items():
-            if member.startswith("_"):
-                continue
-            if isinstance(value, property):
-                out += [f"#### `{name}.{member}`", "", _markdown(inspect.getdoc(value), whole=True), ""]
-            elif inspect.isfunction(value):
-                out += _entry(f"{name}.{member}", value, _markdown(inspect.getdoc(value), whole=True), "####")
+            if inspect.isfunction(value) and not member.startswith("_"):
+                out += _entry(f"{name}.{member}", _call(member, value), _markdown(inspect.getdoc(value), whole=True), "####")
     return out
 
 
 def api_reference() -> str:
     """What ``import sandmod`` gives, what plugin authors import from ``sandmod.api``, and the hooks."""
-    import sandmod
     from sandmod import api, hooks
 
+    names = _public_names()
     out = ["## `import sandmod`", ""]
-    for name in sandmod.__all__:
-        if name != "__version__":
-            out += _documented(f"sandmod.{name}", getattr(sandmod, name))
+    out += [line for name, thing in names if not name.startswith("sandmod.api.") for line in _documented(name, thing)]
     out += ["## `sandmod.api`, for plugin authors", "", _markdown(inspect.getdoc(api), whole=True), ""]
-    for name in api.__all__:
-        out += _documented(f"sandmod.api.{name}", getattr(api, name), hooks)
+    out += [line for name, thing in names if name.startswith("sandmod.api.") for line in _documented(name, thing)]
     out += ["## Hooks", "", _markdown(inspect.getdoc(hooks), whole=True), ""]
     for name in hook_names():
-        out += _entry(name, getattr(hooks, name), _markdown(inspect.getdoc(getattr(hooks, name)), whole=True))
+        hook = getattr(hooks, name)
+        out += _entry(name, _call(name, hook), _markdown(inspect.getdoc(hook), whole=True))
     return "\n".join(out)
 
 
