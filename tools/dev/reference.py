@@ -127,12 +127,17 @@ def _written_type(field: FieldInfo) -> str:
 
 
 def _row(name: str, field: FieldInfo, where: str = "") -> str:
+    """A field's row: its name (with an anchor, given ``where``); what it takes (type, bounds and
+    default); what it does, with an example below."""
     description = " ".join((field.description or "").split()).replace("|", "\\|")
     allowed = _allowed(field).replace("|", "\\|")
     if ", or a list of two" in _written_type(field):  # its length is not the user's to choose: show each value's bounds
         allowed = _item_allowed(field.annotation)
     anchor = f'<a id="{anchor_id(where, name)}"></a>' if where else ""
-    return f"| {anchor}`{name}` | {_written_type(field)} | {_default(field)} | {allowed} | {description} |"
+    default = "required" if field.is_required() else f"default {_default(field)}"
+    example = _example_cell(where, name, field)
+    example = f"<br>{'Its table' if example.startswith('[') else 'Example'}: {example}" if example else ""
+    return f"| {anchor}`{name}` | {', '.join(filter(None, [_written_type(field), allowed]))}<br>{default} | {description}{example} |"
 
 
 def _slug(text: str) -> str:
@@ -150,10 +155,10 @@ def anchor_id(where: str, name: str) -> str:
 
 
 def _table(fields: dict[str, FieldInfo], where: str = "") -> list[str]:
-    """The fields' rows; with ``where`` (the table's path), each with an anchor to link to and an
-    example from the bundled mods, example worlds and sweeps."""
-    rows = ["| field | type | default | allowed | description | example |", "|---|---|---|---|---|---|"]
-    return rows + [_row(field.alias or name, field, where) + f" {_example_cell(where, field.alias or name, field)} |" for name, field in fields.items()]
+    """The fields' rows, and a blank line; nothing when there are none. With ``where`` (the table's
+    path), each row has an anchor to link to and an example from the bundled mods, example worlds and sweeps."""
+    rows = [_row(field.alias or name, field, where) for name, field in fields.items()]
+    return ["| field | takes | what it does |", "|---|---|---|", *rows, ""] if rows else []
 
 
 def _example_cell(where: str, name: str, field: FieldInfo) -> str:
@@ -291,7 +296,7 @@ def _shaped(title: str, models: list[type[BaseModel]]) -> list[str]:
     out = [f"A shape: `shape` is one of {kinds}, with that shape's fields (see [shapes](#shapes)).", ""]
     if added:
         lacking = [f'`"{_shape_value(shape)}"`' for m, shape in zip(models, shapes) if any(n not in m.model_fields for n in added)]
-        out += ["And" + (f" (except {', '.join(lacking)})" if lacking else "") + ":", ""] + _table(added, title) + [""]
+        out += ["And" + (f" (except {', '.join(lacking)})" if lacking else "") + ":", ""] + _table(added, title)
     return out
 
 
@@ -302,7 +307,7 @@ def _shapes_section() -> list[str]:
     for shape in _shape_models():
         value = _shape_value(shape)
         out += [f'### shape = "{value}" {{#shape-{value}}}', "", _markdown(inspect.getdoc(shape)), ""]
-        out += _table({n: f for n, f in shape.model_fields.items() if n != "shape"}, f"shape.{value}") + [""]
+        out += _table({n: f for n, f in shape.model_fields.items() if n != "shape"}, f"shape.{value}")
     return out
 
 
@@ -313,7 +318,7 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
     if len(models) == 1 and inspect.getdoc(models[0]):
         out += [_markdown(inspect.getdoc(models[0])), ""]
     if len(models) == 1:
-        out += _table(models[0].model_fields, title) + [""]
+        out += _table(models[0].model_fields, title)
     elif _shape_of(models[0]) is not None and all(_shape_of(m) is not None for m in models):
         out += _shaped(title, models)
     else:
@@ -324,14 +329,14 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
             if name != key and all(_same(m.model_fields.get(name), field) for m in models)
         }
         if common:
-            out += [f"Every kind of `{title}` takes:", ""] + _table(common, title) + [""]
+            out += [f"Every kind of `{title}` takes:", ""] + _table(common, title)
         for model in models:
             value = typing.get_args(model.model_fields[key].annotation)[0]
             own = {n: f for n, f in model.model_fields.items() if n not in common and n != key}  # the heading says its kind
             out += [f"#### {key} = \"{value}\"", ""]
             if inspect.getdoc(model):
                 out += [_markdown(inspect.getdoc(model)), ""]
-            out += _table(own, f"{title}.{value}") + [""]
+            out += _table(own, f"{title}.{value}") or ["No fields beyond those every kind takes.", ""]
     for model in models:
         for name, field in model.model_fields.items():
             nested = _models_in(field.annotation)
@@ -349,7 +354,7 @@ def file_reference(kind: str) -> str:
     from sandmod.formats.worldspec import WorldFile
 
     model = {"mod": ModFile, "world": WorldFile, "sweep": SweepFile}[kind]
-    out, seen = [f"A {kind} file holds these tables:", ""] + _table(model.model_fields, kind) + [""], set()
+    out, seen = [f"A {kind} file holds these tables:", ""] + _table(model.model_fields, kind), set()
     for name, field in model.model_fields.items():
         key, models = _key_of(field.alias or name, field.annotation), _models_in(field.annotation)
         if models:  # a table of its own (a plain value is in the table above)
