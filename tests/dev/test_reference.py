@@ -95,7 +95,7 @@ def test_the_api_reference_has_an_entry_with_text_for_every_public_name_method_a
     wanted += reference.hook_names() + [f"sandmod.World.{m}" for m in ("step", "run", "paint_shape", "counts", "temperature", "image", "save_snapshot", "load_snapshot")]
     assert len(reference.hook_names()) == 5
     assert [name for name in wanted if name not in entries] == []
-    assert [name for name, body in entries.items() if not re.sub(r"<pre><code>.*?</code></pre>", "", body, flags=re.S).strip()] == []
+    assert [name for name, body in entries.items() if not re.sub(r'<pre class="signature"><code>.*?</code></pre>', "", body, flags=re.S).strip()] == []
 
 
 def test_the_api_reference_shows_nothing_private_or_internal():
@@ -157,7 +157,7 @@ _NOT_SANDMODS = {"Any", "Callable", "False", "Iterable", "Literal", "Mapping", "
 
 def _codes(text: str) -> list[str]:
     """The signatures and definitions the reference shows as code, as HTML."""
-    return re.findall(r"<pre><code>(.*?)</code></pre>", text, flags=re.S)
+    return re.findall(r'<pre class="signature"><code>(.*?)</code></pre>', text, flags=re.S)
 
 
 def test_every_type_a_signature_or_hook_names_is_importable_from_sandmod_or_sandmod_api_and_linked():
@@ -222,3 +222,12 @@ def test_no_generated_reference_has_an_empty_table(page):
     lines = reference.PAGES[page]().splitlines() + [""]
     headers = [number for number, line in enumerate(lines) if re.fullmatch(r"\|(---\|)+", lines[number + 1] if number + 1 < len(lines) else "")]
     assert headers and [lines[n] for n in headers if not lines[n + 2].startswith("|")] == []
+
+
+def test_the_gallery_index_shows_each_example_world_as_a_picture_with_its_name_and_a_line_linking_to_its_page():
+    text = reference.gallery_index()
+    cards = re.findall(r"^-   \[!\[[^\]]+\]\(\.\./images/(\w+)\.webp\)\{ loading=lazy \}\]\((\w+)\.md \"made by sandmod render [^\"]+\"\)\n\n"
+                       r"    \*\*\[[^\]]+\]\((\w+)\.md\)\*\*: \S.*[.!?]$", text, flags=re.M)
+    assert [(name, name, name) for name in reference.example_worlds()] == cards
+    for name in reference.example_worlds():
+        assert (reference.ROOT / "docs" / "images" / f"{name}.webp").is_file()

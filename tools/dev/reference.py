@@ -462,7 +462,8 @@ def _code(text: str) -> str:
     """Python as HTML code, each type the reference documents a link to its entry."""
     links = _type_links()
     pattern = r"(?<![\w.])(" + "|".join(map(re.escape, sorted(links, key=len, reverse=True))) + r")\b"
-    return re.sub(pattern, lambda m: f'<a href="{links[m[1]]}">{m[1]}</a>', html.escape(text, quote=False))
+    linked = re.sub(pattern, lambda m: f'<a href="{links[m[1]]}">{m[1]}</a>', html.escape(text, quote=False))
+    return linked.replace("-&gt;", '<span class="arrow">-&gt;</span>')  # wrapped as one
 
 
 def _signature(thing: Any) -> str:
@@ -580,7 +581,7 @@ def _entry(title: str, code: str, text: str, level: str = "###") -> list[str]:
     """A heading with the name alone and an anchor, the code (a signature) below it, then the text."""
     out = [f"{level} `{title}` {{#{_slug(title)}}}", ""]
     if code:
-        out += [f"<pre><code>{_code(code)}</code></pre>", ""]
+        out += [f'<pre class="signature"><code>{_code(code)}</code></pre>', ""]
     return out + [text.strip(), ""]
 
 
@@ -679,13 +680,24 @@ def gallery_page(name: str) -> str:
     return "\n".join(out)
 
 
+def _first_sentence(text: str) -> str:
+    found = re.match(r".+?[.!?](?=\s|$)", text)
+    return found.group(0) if found else text
+
+
+def _card(name: str) -> list[str]:
+    """An example world as a card of the gallery: its animation (the command that made it said on
+    hovering), its name and its first sentence, each a link to its page."""
+    about = _comment_markdown((ROOT / "examples" / f"{name}.toml").read_text(encoding="utf-8"))[0]
+    words = name.replace("_", " ")
+    return [f'-   [![{words}](../images/{name}.webp){{ loading=lazy }}]({name}.md "made by {_render_command(name)}")', "",
+            f"    **[{words.capitalize()}]({name}.md)**: {_first_sentence(about)}", ""]
+
+
 def gallery_index() -> str:
-    """Every example world: its name, its first sentence, a link to its page."""
-    rows = ["| world | what it shows |", "|---|---|"]
-    for name in example_worlds():
-        about = _comment_markdown((ROOT / "examples" / f"{name}.toml").read_text(encoding="utf-8"))[0]
-        rows.append(f"| [{name.replace('_', ' ')}]({name}.md) | {about} |")
-    return "\n".join(rows)
+    """Every example world as a card: its picture, its name, its first sentence, a link to its page."""
+    cards = [line for name in example_worlds() for line in _card(name)]
+    return "\n".join(['<div class="grid cards" markdown>', "", *cards, "</div>"])
 
 
 def changelog() -> str:
