@@ -200,9 +200,10 @@ def test_every_public_attribute_of_every_public_class_has_a_row_with_its_type_an
     }
     text = reference.api_reference()
     rows = dict(re.findall(r'^\| <a id="([a-z0-9-]+)"></a>`\w+` \| (.*) \|$', text, flags=re.M))
-    checked = 0
+    checked, seen = 0, set()
     for name, thing in reference._public_names():
-        if inspect.isclass(thing):
+        if inspect.isclass(thing) and thing not in seen:  # a second name's entry points to the first
+            seen.add(thing)
             for attribute in _public_attributes(thing, *made.get(thing, [])):
                 row = rows.get(reference._slug(f"{name}.{attribute}"), "")
                 kind, _, what = row.partition(" | ")

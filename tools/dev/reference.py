@@ -609,11 +609,14 @@ def api_reference() -> str:
     """What ``import sandmod`` gives, what plugin authors import from ``sandmod.api``, and the hooks."""
     from sandmod import api, hooks
 
-    names = _public_names()
-    out = ["## `import sandmod`", ""]
-    out += [line for name, thing in names if not name.startswith("sandmod.api.") for line in _documented(name, thing)]
-    out += ["## `sandmod.api`, for plugin authors", "", _markdown(inspect.getdoc(api), whole=True), ""]
-    out += [line for name, thing in names if name.startswith("sandmod.api.") for line in _documented(name, thing)]
+    first: dict[int, str] = {}  # each thing's first name: a second one points to its entry
+    sections: dict[bool, list[str]] = {False: [], True: []}  # by whether it is sandmod.api's
+    for name, thing in _public_names():
+        earlier = first.setdefault(id(thing), name)
+        same = _entry(name, "", f"The same as [`{earlier}`](#{_slug(earlier)}).")
+        sections[name.startswith("sandmod.api.")] += _documented(name, thing) if earlier == name else same
+    out = ["## `import sandmod`", "", *sections[False]]
+    out += ["## `sandmod.api`, for plugin authors", "", _markdown(inspect.getdoc(api), whole=True), "", *sections[True]]
     out += ["## Hooks", "", _markdown(inspect.getdoc(hooks), whole=True), ""]
     for name in hook_names():
         hook = getattr(hooks, name)
