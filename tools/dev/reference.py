@@ -3,7 +3,8 @@
 - :func:`file_reference`: every field of the mod or world file format, from its pydantic
   models (type, allowed values, default, description);
 - :func:`cli_reference`: every command and option, from the click commands;
-- :func:`api_reference`: the public Python API, from its signatures and docstrings.
+- :func:`api_reference`: the public Python API, from its signatures and docstrings;
+- :func:`gallery_index`, :func:`gallery_page`: the gallery, from the example worlds' files.
 
 The pages are committed, so that they read well on any Markdown viewer, and
 ``tests/dev/test_reference.py`` fails when one is out of date. Each page's
@@ -129,8 +130,8 @@ def _written_type(field: FieldInfo) -> str:
 def _row(name: str, field: FieldInfo, where: str = "") -> str:
     """A field's row: its name (with an anchor, given ``where``); what it takes (type, bounds and
     default); what it does, with an example below."""
-    description = " ".join((field.description or "").split()).replace("|", "\\|")
-    allowed = _allowed(field).replace("|", "\\|")
+    description = _cell(" ".join((field.description or "").split()))
+    allowed = _cell(_allowed(field))
     if ", or a list of two" in _written_type(field):  # its length is not the user's to choose: show each value's bounds
         allowed = _item_allowed(field.annotation)
     anchor = f'<a id="{anchor_id(where, name)}"></a>' if where else ""
@@ -138,6 +139,11 @@ def _row(name: str, field: FieldInfo, where: str = "") -> str:
     example = _example_cell(where, name, field)
     example = f"<br>{'Its table' if example.startswith('[') else 'Example'}: {example}" if example else ""
     return f"| {anchor}`{name}` | {', '.join(filter(None, [_written_type(field), allowed]))}<br>{default} | {description}{example} |"
+
+
+def _cell(text: str) -> str:
+    """Text as a table's cell holds it: its pipes escaped."""
+    return text.replace("|", "\\|")
 
 
 def _slug(text: str) -> str:
@@ -167,7 +173,7 @@ def _example_cell(where: str, name: str, field: FieldInfo) -> str:
     if found := _example(where, name):
         return found
     if field.examples:
-        return f"`{name} = {_toml_value(field.examples[0])}`".replace("|", "\\|")
+        return _cell(f"`{name} = {_toml_value(field.examples[0])}`")
     if _models_in(field.annotation):
         key = _key_of(name, field.annotation)
         parent = where.rpartition("]")[0] + "]" if "]" in where else ""
@@ -227,7 +233,7 @@ def _example(where: str, name: str) -> str:
             if isinstance(value, list) and value and isinstance(value[0], dict):
                 return ""  # a list of tables: its own section has the examples
             text = f"{name} = {_toml_value(value)}"
-            return f"`{text}`".replace("|", "\\|") if len(text) <= 64 and "\n" not in text else ""
+            return _cell(f"`{text}`") if len(text) <= 64 and "\n" not in text else ""
     return ""
 
 
@@ -383,10 +389,10 @@ def _option_row(param: click.Parameter) -> str:
     if isinstance(param, click.Argument):
         return f"| `{param.human_readable_name}` | argument{'' if param.required else ', optional'} | |"
     names = ", ".join(f"`{o}`" for o in param.opts + param.secondary_opts)
-    kind = "flag" if getattr(param, "is_flag", False) else _param_type(param.type).replace("|", "\\|")
+    kind = "flag" if getattr(param, "is_flag", False) else _cell(_param_type(param.type))
     if param.multiple:
         kind += ", repeatable"
-    help_text = " ".join((param.help or "").split()).replace("|", "\\|")
+    help_text = _cell(" ".join((param.help or "").split()))
     return f"| {names} | {kind} | {help_text} |"
 
 
@@ -474,7 +480,7 @@ def _signature(thing: Any) -> str:
     if inspect.isclass(thing) and (getattr(thing, "_is_protocol", False) or thing.__name__ in _MADE_BY_SANDMOD):
         return ""
     if inspect.isclass(thing) and issubclass(thing, BaseModel):
-        return "(*, " + ", ".join(f"{name}: {kind}" + (f" = {default}" if default else "") for name, kind, default in _model_fields(thing)) + ")"
+        return _model_signature(thing)
     try:
         signature = inspect.signature(thing)
     except (TypeError, ValueError):
@@ -485,12 +491,13 @@ def _signature(thing: Any) -> str:
     return re.sub(r"(?<!= )'([A-Za-z_][^']*)'", r"\1", text)  # quoted annotations, not string defaults
 
 
-def _model_fields(model: type[BaseModel]) -> list[tuple[str, str, str]]:
-    """A pydantic model's fields as its constructor takes them: (name, type, default or empty when required)."""
-    return [
-        (field.alias or name, _python_type(field.annotation), "" if field.is_required() else repr(field.get_default(call_default_factory=True)))
-        for name, field in model.model_fields.items()
-    ]
+def _model_signature(model: type[BaseModel]) -> str:
+    """A pydantic model's fields as its constructor takes them (keywords), their rules left out."""
+    parameters = []
+    for name, field in model.model_fields.items():
+        default = "" if field.is_required() else f" = {field.get_default(call_default_factory=True)!r}"
+        parameters.append(f"{field.alias or name}: {_python_type(field.annotation)}{default}")
+    return f"(*, {', '.join(parameters)})"
 
 
 def _source_line(lines: list[str], name: str, indent: str = "") -> tuple[int, str] | None:
@@ -564,14 +571,14 @@ def _attributes(cls: type) -> list[tuple[str, str, str]]:
                 found[name] = (_python_type(fields[name].annotation if name in fields else annotation), text)
         for name, value in vars(klass).items():
             if isinstance(value, property) and not name.startswith("_"):
-                found[name] = (_python_type(inspect.signature(value.fget).return_annotation), _markdown(inspect.getdoc(value)))
+                found[name] = (_python_type(inspect.signature(value.fget).return_annotation), (inspect.getdoc(value) or "").split("\n\n")[0])
     return [(name, kind, " ".join(text.split())) for name, (kind, text) in found.items()]
 
 
 def _attribute_table(name: str, cls: type) -> list[str]:
     """A class's attributes as a table, each row with an anchor of its own; nothing when it has none."""
     rows = [
-        f'| <a id="{_slug(f"{name}.{attribute}")}"></a>`{attribute}` | <code>{_code(kind).replace("|", chr(92) + "|")}</code> | {_markdown(text).replace("|", chr(92) + "|")} |'
+        f'| <a id="{_slug(f"{name}.{attribute}")}"></a>`{attribute}` | <code>{_cell(_code(kind))}</code> | {_cell(_markdown(text))} |'
         for attribute, kind, text in _attributes(cls)
     ]
     return ["| attribute | type | what |", "|---|---|---|", *rows, ""] if rows else []
