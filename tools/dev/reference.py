@@ -88,7 +88,7 @@ def _allowed(field: FieldInfo) -> str:
             parts.append(f"at most {rule.max_length} long")
         if getattr(rule, "pattern", None):
             parts.append(f"`{rule.pattern}`")
-    return ", ".join(parts)
+    return re.sub(r"at least (\d+) long, at most \1 long", r"\1 long", ", ".join(parts))  # a pair, a region: its length
 
 
 def _item_allowed(annotation) -> str:
