@@ -14,17 +14,23 @@ Everything here is stable; the modules it comes from are not.
 from __future__ import annotations
 
 from .errors import Problem, ProblemsError
-from .hooks import ModLoader, hookimpl
+from .hooks import Metric, ModLoader, hookimpl
+from .formats.modspec import Explosion
 from .formats.recording import Recorder, RecorderSpec, SavedAtClose, VideoSettings, palette_image, write_png
-from .formats.tomlsource import TomlSource
+from .formats.tomlsource import Loc, TomlSource
+from .world.world import State
 
 __all__ = [
+    "Explosion",
+    "Loc",
+    "Metric",
     "ModLoader",
     "Problem",
     "ProblemsError",
     "Recorder",
     "RecorderSpec",
     "SavedAtClose",
+    "State",
     "TomlSource",
     "VideoSettings",
     "hookimpl",

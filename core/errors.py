@@ -20,10 +20,15 @@ _UNPRINTABLE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e
 class Problem:
     """One mistake in a user's file."""
 
+    #: The file, as the user would type its path.
     file: str
+    #: Its line (1-based), or None where no line is known.
     line: int | None
+    #: The field's path within the file (``elements.sand.density``), or empty.
     path: str
+    #: What is wrong.
     message: str
+    #: The column (1-based), where known.
     column: int | None = None
 
     def __str__(self) -> str:
@@ -36,6 +41,9 @@ class Problem:
 
 class ProblemsError(Exception):
     """Raised with every problem found in the user's input."""
+
+    #: Each problem once, in the order found.
+    problems: list[Problem]
 
     def __init__(self, problems: Iterable[Problem]):
         self.problems = list(dict.fromkeys(problems))  # each once, in the order found

@@ -22,6 +22,7 @@ import pluggy
 if TYPE_CHECKING:
     from .formats.recording import RecorderSpec
     from .formats.tomlsource import TomlSource
+    from .world.world import World
 
 PROJECT = "sandmod"
 
@@ -73,7 +74,7 @@ def register_recorders(register: Callable[["RecorderSpec"], None]) -> None:
 
 
 #: Measures a world: a number, or a mapping of names to numbers (each becomes a column ``name.key``).
-Metric = Callable[[Any], "float | Mapping[str, float]"]
+Metric = Callable[["World"], "float | Mapping[str, float]"]
 
 
 @hookspec

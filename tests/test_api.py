@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -61,3 +62,49 @@ def test_the_plugin_api_names_what_it_exports():
 
     assert all(getattr(api, name) is not None for name in api.__all__)
     assert api.RecorderSpec.__module__ == "sandmod.formats.recording"
+
+
+def _public_namespace() -> dict:
+    """What a reader of the reference can import: sandmod's and sandmod.api's names, and the
+    standard library's and numpy's that signatures use."""
+    from typing import Any, Callable, Iterable, Mapping, Sequence
+
+    from sandmod import api
+
+    public = {name: getattr(sandmod, name) for name in sandmod.__all__} | {name: getattr(api, name) for name in api.__all__}
+    return {"np": np, "Path": Path, "Any": Any, "Callable": Callable, "Iterable": Iterable, "Mapping": Mapping, "Sequence": Sequence, **public}
+
+
+def _signed() -> list[tuple[str, object]]:
+    """Every public function, method, constructor and hook spec, by name."""
+    import inspect
+
+    from pydantic import BaseModel
+
+    from sandmod import api, hooks
+
+    found = [(name, getattr(hooks, name)) for name, value in vars(hooks).items() if hasattr(value, "sandmod_spec")]
+    for module in (sandmod, api):
+        for name in module.__all__:
+            thing = getattr(module, name)
+            if inspect.isfunction(thing):
+                found.append((name, thing))
+            elif inspect.isclass(thing) and thing.__module__.startswith("sandmod"):
+                made_by_sandmod = name in ("LoadedWorld", "Ruleset") or issubclass(thing, (BaseModel, tuple))  # no constructor of the caller's
+                methods = {k: v for k, v in vars(thing).items() if inspect.isfunction(v) and (not k.startswith("_") or k == "__init__" and not made_by_sandmod)}
+                found += [(f"{name}.{k}", v) for k, v in methods.items()]
+    return found
+
+
+def test_every_type_a_public_signature_or_hook_names_is_importable_from_sandmod_or_sandmod_api():
+    import typing
+
+    namespace = _public_namespace()
+    signed = _signed()
+    assert len(signed) >= 40 and "register_metrics" in dict(signed)
+    for name, function in signed:
+        shown = {k: v for k, v in function.__annotations__.items() if k not in ("salt", "registry")}  # the engine's and the CLI's, not shown
+        try:
+            typing.get_type_hints(types.SimpleNamespace(__annotations__=shown), globalns=namespace, localns=namespace)
+        except NameError as missing:
+            raise AssertionError(f"{name}: {missing}, not importable from sandmod or sandmod.api") from None

@@ -25,11 +25,16 @@ import numpy as np
 class VideoSettings:
     """What a recorder needs to know about the frames it will get."""
 
+    #: Frame width in pixels.
     width: int
+    #: Frame height in pixels.
     height: int
-    palette: bytes  # 768 bytes: 256 RGB triples
+    #: 768 bytes: 256 RGB triples.
+    palette: bytes
+    #: Frames a second.
     fps: float
-    loop: int = 0  # times the animation plays in all; 0 = forever
+    #: Times the animation plays in all; 0 = forever.
+    loop: int = 0
 
     def rgb(self, frame: np.ndarray) -> np.ndarray:
         """A palette frame as a (height, width, 3) uint8 RGB array, for formats without palettes."""
@@ -57,6 +62,11 @@ class SavedAtClose:
     Subclasses say what is kept of a frame (:meth:`convert`) and how it is
     all saved (:meth:`save`).
     """
+
+    #: The file to write.
+    path: Path
+    #: The frames' size, palette and speed.
+    settings: VideoSettings
 
     def __init__(self, path: Path, settings: VideoSettings):
         self.path = path
@@ -88,13 +98,20 @@ class SavedAtClose:
 class RecorderSpec:
     """An output format that plugins register."""
 
+    #: The format's name, as ``--format`` takes it.
     name: str
+    #: The file extensions it writes (``.gif``), lower case.
     extensions: tuple[str, ...]
+    #: Opens a recorder on a path.
     open: Callable[[Path, VideoSettings], Recorder]
+    #: One line for ``sandmod list``.
     description: str = ""
-    folder: str | None = None  # for a recorder that writes a folder: a glob of its files' names, e.g. "frame_*.png"
-    max_side: int | None = None  # the widest and tallest image the format holds, in pixels
-    kept_bytes_per_pixel: float = 0.0  # memory each recorded pixel takes until the output is closed (0: streamed)
+    #: For a recorder that writes a folder: a glob of its files' names, e.g. "frame_*.png".
+    folder: str | None = None
+    #: The widest and tallest image the format holds, in pixels.
+    max_side: int | None = None
+    #: Memory each recorded pixel takes until the output is closed (0: streamed).
+    kept_bytes_per_pixel: float = 0.0
 
 
 class WriteError(OSError):

@@ -17,6 +17,7 @@ from typing import Any, Sequence
 from ..errors import Problem, ProblemsError, display_path
 from .userfiles import Refused, read_bytes
 
+#: A key's path in a file: its keys and list indices, ``("elements", "sand", "density")``.
 Loc = tuple[str | int, ...]
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
@@ -169,12 +170,18 @@ def _skip_value(raw: str, pos: int) -> int:
 class TomlSource:
     """A parsed TOML file: its data, its path as shown to users, and key positions."""
 
+    #: The file's path as shown to users.
     name: str
+    #: The file's text.
     text: str
+    #: The parsed tables.
     data: dict[str, Any]
-    positions: dict[Loc, tuple[int, int]] = field(default_factory=dict)  # key path -> (line, column)
-    path: Path | None = None  # the file it was read from, if any (symlinks resolved)
-    folder: Path | None = None  # the folder of the path the file was read by (a symlink's own folder)
+    #: Each key path's (line, column).
+    positions: dict[Loc, tuple[int, int]] = field(default_factory=dict)
+    #: The file it was read from, if any (symlinks resolved).
+    path: Path | None = None
+    #: The folder of the path the file was read by (a symlink's own folder).
+    folder: Path | None = None
 
     @classmethod
     def read(cls, path: str | Path) -> "TomlSource":

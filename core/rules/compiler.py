@@ -168,12 +168,18 @@ class CompiledReaction:
 class Ruleset:
     """Everything the engine knows about the loaded elements."""
 
+    #: The mods loaded, in load order.
     mods: tuple[LoadedMod, ...]
+    #: Every element, by id (0 is ``base:empty``).
     elements: tuple[ElementInfo, ...]
+    #: Every reaction, compiled.
     reactions: tuple[CompiledReaction, ...]
+    #: The per-element arrays the kernel reads.
     tables: Tables
-    palette: bytes  # 768 bytes, 256 RGB triples
-    looks: "Looks"  # palette indices per element: shades, scorched shades, glow levels
+    #: 768 bytes, 256 RGB triples.
+    palette: bytes
+    #: Palette indices per element: shades, scorched shades, glow levels.
+    looks: "Looks"
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
 
     @property

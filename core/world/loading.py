@@ -45,14 +45,22 @@ def load_ruleset(
 class LoadedWorld:
     """A world file, its ruleset, and the world built from it."""
 
+    #: The world file.
     path: Path
+    #: The world file, validated.
     spec: WorldFile
+    #: The world file as parsed, with the line of each key.
     source: TomlSource
+    #: The mods the world asks for, compiled.
     ruleset: Ruleset
+    #: The world, its scene painted, at frame 0.
     world: World
+    #: What the plugins registered.
     registry: Registry
-    warnings: list[Problem] = field(default_factory=list)  # e.g. other mod versions than it was made with
-    memory: MemoryBudget = field(default_factory=MemoryBudget)  # what it was allowed, and promised so far
+    #: What the user should know of: other mod versions than the world was made with.
+    warnings: list[Problem] = field(default_factory=list)
+    #: The memory it was allowed, and promised so far.
+    memory: MemoryBudget = field(default_factory=MemoryBudget)
 
     @property
     def inputs(self) -> list[Path]:

@@ -217,12 +217,43 @@ def _on_own_lines(shape: tuple[int, int], dtype) -> np.ndarray:
 class World:
     """A grid of cells under one ruleset and seed; ``gravity`` scales every element's."""
 
+    #: The compiled elements the world runs under.
+    ruleset: Ruleset
+    #: Columns of cells.
+    width: int
+    #: Rows of cells.
+    height: int
+    #: The seed of every random roll: the same seed and world file, the same frames.
+    seed: int
+    #: Frames stepped so far (a loaded snapshot's own frame).
+    frame: int
+    #: The per-cell arrays the kernel updates; code that writes them directly calls :meth:`wake`.
+    state: State
+    #: The ruleset's tables, each element's acceleration scaled by ``gravity``.
+    tables: Tables
+    #: Wake marks per chunk: which chunks (and rows of them) the next step updates.
+    awake: np.ndarray
+    #: Threads to step on; None: as many as pay.
+    threads: int | None
+    #: The world file's ``[[emitters]]``, pouring while they are on.
+    emitters: list[Emitter]
+    #: The world file's ``[[sprays]]`` and its timeline's ``spawn`` bursts.
+    sprays: list[Spray]
+    #: Explosions the world file sets off: (frame, blast), in the order they go off.
+    scheduled: list[tuple[int, np.ndarray]]
+    #: The timeline's ``paint`` and ``erase`` events.
+    paintings: list[Painting]
+    #: The timeline's ``heat`` events.
+    heaters: list[Heater]
+    #: The timeline's ``launch`` events.
+    launchers: list[Launcher]
+
     def __init__(self, ruleset: Ruleset, width: int, height: int, seed: int = 0, gravity: float = 1.0):
         self.ruleset = ruleset
         self.width, self.height, self.seed = width, height, seed
         self.frame = 0
         t = ruleset.tables
-        self.tables: Tables = t if gravity == 1.0 else t._replace(accel=np.round(t.accel * gravity).astype(np.int32))
+        self.tables = t if gravity == 1.0 else t._replace(accel=np.round(t.accel * gravity).astype(np.int32))
         shape = (height, width)
         self.state = State(
             cells=np.zeros(shape, np.uint16),
@@ -244,7 +275,7 @@ class World:
         self._fast_gain = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile: did the kernel's fast loop pay?
         self._also_present = 0  # -1: the kernel looks for partners next to every cell, none skipped (for tests)
         self._fast_route = 0  # 1: every tile through the kernel's fast loop, -1: none (for tests); 0: as it pays
-        self.threads: int | None = None  # threads to step on; None: as many as pay (see sandmod.engine.threads)
+        self.threads = None  # threads to step on; None: as many as pay (see sandmod.engine.threads)
         self._chooser: Chooser | None = None  # picks them then
         self.emitters: list[Emitter] = []
         self.sprays: list[Spray] = []

@@ -3,7 +3,8 @@
 - :func:`file_reference`: every field of the mod or world file format, from its pydantic
   models (type, allowed values, default, description);
 - :func:`cli_reference`: every command and option, from the click commands;
-- :func:`api_reference`: the public Python API, from its signatures and docstrings.
+- :func:`api_reference`: the public Python API, from its signatures and docstrings;
+- :func:`gallery_index`, :func:`gallery_page`: the gallery, from the example worlds' files.
 
 The pages are committed, so that they read well on any Markdown viewer, and
 ``tests/dev/test_reference.py`` fails when one is out of date. Each page's
@@ -15,6 +16,7 @@ text below its marker line is the generated part; write them anew with::
 from __future__ import annotations
 
 import functools
+import html
 import inspect
 import re
 import sys
@@ -86,7 +88,7 @@ def _allowed(field: FieldInfo) -> str:
             parts.append(f"at most {rule.max_length} long")
         if getattr(rule, "pattern", None):
             parts.append(f"`{rule.pattern}`")
-    return ", ".join(parts)
+    return re.sub(r"at least (\d+) long, at most \1 long", r"\1 long", ", ".join(parts))  # a pair, a region: its length
 
 
 def _item_allowed(annotation) -> str:
@@ -126,12 +128,22 @@ def _written_type(field: FieldInfo) -> str:
 
 
 def _row(name: str, field: FieldInfo, where: str = "") -> str:
-    description = " ".join((field.description or "").split()).replace("|", "\\|")
-    allowed = _allowed(field).replace("|", "\\|")
+    """A field's row: its name (with an anchor, given ``where``); what it takes (type, bounds and
+    default); what it does, with an example below."""
+    description = _cell(" ".join((field.description or "").split()))
+    allowed = _cell(_allowed(field))
     if ", or a list of two" in _written_type(field):  # its length is not the user's to choose: show each value's bounds
         allowed = _item_allowed(field.annotation)
     anchor = f'<a id="{anchor_id(where, name)}"></a>' if where else ""
-    return f"| {anchor}`{name}` | {_written_type(field)} | {_default(field)} | {allowed} | {description} |"
+    default = "required" if field.is_required() else f"default {_default(field)}"
+    example = _example_cell(where, name, field)
+    example = f"<br>{'Its table' if example.startswith('[') else 'Example'}: {example}" if example else ""
+    return f"| {anchor}`{name}` | {', '.join(filter(None, [_written_type(field), allowed]))}<br>{default} | {description}{example} |"
+
+
+def _cell(text: str) -> str:
+    """Text as a table's cell holds it: its pipes escaped."""
+    return text.replace("|", "\\|")
 
 
 def _slug(text: str) -> str:
@@ -149,10 +161,10 @@ def anchor_id(where: str, name: str) -> str:
 
 
 def _table(fields: dict[str, FieldInfo], where: str = "") -> list[str]:
-    """The fields' rows; with ``where`` (the table's path), each with an anchor to link to and an
-    example from the bundled mods, example worlds and sweeps."""
-    rows = ["| field | type | default | allowed | description | example |", "|---|---|---|---|---|---|"]
-    return rows + [_row(field.alias or name, field, where) + f" {_example_cell(where, field.alias or name, field)} |" for name, field in fields.items()]
+    """The fields' rows, and a blank line; nothing when there are none. With ``where`` (the table's
+    path), each row has an anchor to link to and an example from the bundled mods, example worlds and sweeps."""
+    rows = [_row(field.alias or name, field, where) for name, field in fields.items()]
+    return ["| field | takes | what it does |", "|---|---|---|", *rows, ""] if rows else []
 
 
 def _example_cell(where: str, name: str, field: FieldInfo) -> str:
@@ -161,7 +173,7 @@ def _example_cell(where: str, name: str, field: FieldInfo) -> str:
     if found := _example(where, name):
         return found
     if field.examples:
-        return f"`{name} = {_toml_value(field.examples[0])}`".replace("|", "\\|")
+        return _cell(f"`{name} = {_toml_value(field.examples[0])}`")
     if _models_in(field.annotation):
         key = _key_of(name, field.annotation)
         parent = where.rpartition("]")[0] + "]" if "]" in where else ""
@@ -221,7 +233,7 @@ def _example(where: str, name: str) -> str:
             if isinstance(value, list) and value and isinstance(value[0], dict):
                 return ""  # a list of tables: its own section has the examples
             text = f"{name} = {_toml_value(value)}"
-            return f"`{text}`".replace("|", "\\|") if len(text) <= 64 and "\n" not in text else ""
+            return _cell(f"`{text}`") if len(text) <= 64 and "\n" not in text else ""
     return ""
 
 
@@ -262,7 +274,7 @@ def _markdown(docstring: str | None, whole: bool = False) -> str:
     """A docstring (its first paragraph unless ``whole``), its reStructuredText literals as Markdown's."""
     text = (docstring or "") if whole else (docstring or "").split("\n\n")[0]
     text = re.sub(r"(?:^|\n\n)::\n\n", "\n\nFor example::\n\n", text).lstrip("\n")  # a literal block with no sentence before it
-    text = re.sub(r"::\n\n((?:    .*\n?|\n)+)", lambda m: ":\n\n```\n" + textwrap.dedent(m.group(1)).strip("\n") + "\n```\n", text)
+    text = re.sub(r"::\n\n((?:    .*\n?|\n)+)", lambda m: ":\n\n```\n" + textwrap.dedent(m.group(1)).strip("\n") + "\n```\n\n", text)
     return re.sub(r"``(.+?)``", r"`\1`", re.sub(r":\w+:`~?([^`]+)`", r"`\1`", text))
 
 
@@ -290,7 +302,7 @@ def _shaped(title: str, models: list[type[BaseModel]]) -> list[str]:
     out = [f"A shape: `shape` is one of {kinds}, with that shape's fields (see [shapes](#shapes)).", ""]
     if added:
         lacking = [f'`"{_shape_value(shape)}"`' for m, shape in zip(models, shapes) if any(n not in m.model_fields for n in added)]
-        out += ["And" + (f" (except {', '.join(lacking)})" if lacking else "") + ":", ""] + _table(added, title) + [""]
+        out += ["And" + (f" (except {', '.join(lacking)})" if lacking else "") + ":", ""] + _table(added, title)
     return out
 
 
@@ -301,7 +313,7 @@ def _shapes_section() -> list[str]:
     for shape in _shape_models():
         value = _shape_value(shape)
         out += [f'### shape = "{value}" {{#shape-{value}}}', "", _markdown(inspect.getdoc(shape)), ""]
-        out += _table({n: f for n, f in shape.model_fields.items() if n != "shape"}, f"shape.{value}") + [""]
+        out += _table({n: f for n, f in shape.model_fields.items() if n != "shape"}, f"shape.{value}")
     return out
 
 
@@ -312,7 +324,7 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
     if len(models) == 1 and inspect.getdoc(models[0]):
         out += [_markdown(inspect.getdoc(models[0])), ""]
     if len(models) == 1:
-        out += _table(models[0].model_fields, title) + [""]
+        out += _table(models[0].model_fields, title)
     elif _shape_of(models[0]) is not None and all(_shape_of(m) is not None for m in models):
         out += _shaped(title, models)
     else:
@@ -323,14 +335,14 @@ def _sections(title: str, models: list[type[BaseModel]], seen: set) -> list[str]
             if name != key and all(_same(m.model_fields.get(name), field) for m in models)
         }
         if common:
-            out += [f"Every kind of `{title}` takes:", ""] + _table(common, title) + [""]
+            out += [f"Every kind of `{title}` takes:", ""] + _table(common, title)
         for model in models:
             value = typing.get_args(model.model_fields[key].annotation)[0]
             own = {n: f for n, f in model.model_fields.items() if n not in common and n != key}  # the heading says its kind
             out += [f"#### {key} = \"{value}\"", ""]
             if inspect.getdoc(model):
                 out += [_markdown(inspect.getdoc(model)), ""]
-            out += _table(own, f"{title}.{value}") + [""]
+            out += _table(own, f"{title}.{value}") or ["No fields beyond those every kind takes.", ""]
     for model in models:
         for name, field in model.model_fields.items():
             nested = _models_in(field.annotation)
@@ -348,7 +360,7 @@ def file_reference(kind: str) -> str:
     from sandmod.formats.worldspec import WorldFile
 
     model = {"mod": ModFile, "world": WorldFile, "sweep": SweepFile}[kind]
-    out, seen = [f"A {kind} file holds these tables:", ""] + _table(model.model_fields, kind) + [""], set()
+    out, seen = [f"A {kind} file holds these tables:", ""] + _table(model.model_fields, kind), set()
     for name, field in model.model_fields.items():
         key, models = _key_of(field.alias or name, field.annotation), _models_in(field.annotation)
         if models:  # a table of its own (a plain value is in the table above)
@@ -377,10 +389,10 @@ def _option_row(param: click.Parameter) -> str:
     if isinstance(param, click.Argument):
         return f"| `{param.human_readable_name}` | argument{'' if param.required else ', optional'} | |"
     names = ", ".join(f"`{o}`" for o in param.opts + param.secondary_opts)
-    kind = "flag" if getattr(param, "is_flag", False) else _param_type(param.type).replace("|", "\\|")
+    kind = "flag" if getattr(param, "is_flag", False) else _cell(_param_type(param.type))
     if param.multiple:
         kind += ", repeatable"
-    help_text = " ".join((param.help or "").split()).replace("|", "\\|")
+    help_text = _cell(" ".join((param.help or "").split()))
     return f"| {names} | {kind} | {help_text} |"
 
 
@@ -423,10 +435,41 @@ def cli_reference() -> str:
 # --- the Python API ---------------------------------------------------------------------------
 
 
-#: Parameters that are the engine's business, not the caller's: left out.
-_INTERNAL_PARAMETERS = ("salt",)
+#: Parameters that are the engine's or the command line's business, not the caller's: left out.
+_INTERNAL_PARAMETERS = ("salt", "registry")
 #: Classes sandmod makes (load_world, load_ruleset), never the caller: no constructor shown.
 _MADE_BY_SANDMOD = ("LoadedWorld", "Ruleset")
+#: Types documented on another page of the reference, and where.
+_DOCUMENTED_ELSEWHERE = {"WorldFile": "world-files.md"}
+
+
+def _public_names() -> list[tuple[str, Any]]:
+    """Each name the page documents, as the reader imports it, and its value: ``import sandmod``'s, then ``sandmod.api``'s."""
+    import sandmod
+    from sandmod import api
+
+    return [(f"sandmod.{n}", getattr(sandmod, n)) for n in sandmod.__all__ if n != "__version__"] + [
+        (f"sandmod.api.{n}", getattr(api, n)) for n in api.__all__
+    ]
+
+
+@functools.cache
+def _type_links() -> dict[str, str]:
+    """Each type the reference documents, by the name signatures call it, and the link to its entry (the first, where two import it)."""
+    links = dict(_DOCUMENTED_ELSEWHERE)
+    for name, thing in reversed(_public_names()):
+        short = name.rsplit(".", 1)[-1]
+        if inspect.isclass(thing) or typing.get_origin(thing) is not None:
+            links[short] = f"#{_slug(name)}"
+    return links
+
+
+def _code(text: str) -> str:
+    """Python as HTML code, each type the reference documents a link to its entry."""
+    links = _type_links()
+    pattern = r"(?<![\w.])(" + "|".join(map(re.escape, sorted(links, key=len, reverse=True))) + r")\b"
+    linked = re.sub(pattern, lambda m: f'<a href="{links[m[1]]}">{m[1]}</a>', html.escape(text, quote=False))
+    return linked.replace("-&gt;", '<span class="arrow">-&gt;</span>')  # wrapped as one
 
 
 def _signature(thing: Any) -> str:
@@ -436,72 +479,155 @@ def _signature(thing: Any) -> str:
         return ""  # a marker used as @hookimpl, an alias of a type
     if inspect.isclass(thing) and (getattr(thing, "_is_protocol", False) or thing.__name__ in _MADE_BY_SANDMOD):
         return ""
+    if inspect.isclass(thing) and issubclass(thing, BaseModel):
+        return _model_signature(thing)
     try:
         signature = inspect.signature(thing)
     except (TypeError, ValueError):
         return ""
     parameters = [p for name, p in signature.parameters.items() if name != "self" and not name.startswith("_") and name not in _INTERNAL_PARAMETERS]
     text = str(signature.replace(parameters=parameters)).replace("<factory>", "...").replace('"', "")
+    text = re.sub(r"ForwardRef\(([^)]*)\)", r"\1", text)  # a named tuple's
     return re.sub(r"(?<!= )'([A-Za-z_][^']*)'", r"\1", text)  # quoted annotations, not string defaults
 
 
-def _attribute_doc(module: types.ModuleType, name: str) -> str:
-    """The ``#:`` comment above ``name = ...`` in ``module``'s source (an alias or a marker)."""
-    lines = inspect.getsource(module).splitlines()
+def _model_signature(model: type[BaseModel]) -> str:
+    """A pydantic model's fields as its constructor takes them (keywords), their rules left out."""
+    parameters = []
+    for name, field in model.model_fields.items():
+        default = "" if field.is_required() else f" = {field.get_default(call_default_factory=True)!r}"
+        parameters.append(f"{field.alias or name}: {_python_type(field.annotation)}{default}")
+    return f"(*, {', '.join(parameters)})"
+
+
+def _source_line(lines: list[str], name: str, indent: str = "") -> tuple[int, str] | None:
+    """The line (number, text) that gives ``name`` a value or a type at ``indent``."""
     for number, line in enumerate(lines):
-        if re.match(rf"{name}\s*(:[^=]*)?=", line):
-            comments = []
-            for above in reversed(lines[:number]):
-                if not above.startswith("#:"):
-                    break
-                comments.insert(0, above[2:].strip())
-            return " ".join(comments)
-    return ""
+        if re.match(rf"{indent}{name}\s*[:=]", line):
+            return number, line
+    return None
 
 
-def _entry(title: str, thing: Any, text: str, level: str = "###") -> list[str]:
-    """A heading with the name alone, the signature as code below it, then the text."""
-    signature = _signature(thing)
-    out = [f"{level} `{title}`", ""]
-    if signature:
-        kind = "class " if inspect.isclass(thing) else ""
-        out += ["```python", f"{kind}{title.rsplit('.', 1)[-1]}{signature}", "```", ""]
+def _comment(lines: list[str], name: str, indent: str = "") -> str:
+    """The ``#:`` comment above ``name``'s line, or else the comment at its end."""
+    found = _source_line(lines, name, indent)
+    if found is None:
+        return ""
+    number, line = found
+    above = []
+    for previous in reversed(lines[:number]):
+        if not previous.strip().startswith("#:"):
+            break
+        above.insert(0, previous.strip()[2:].strip())
+    return " ".join(above) or (line.split("  # ", 1)[1].strip() if "  # " in line else "")
+
+
+def _defined_in(name: str, thing: Any) -> types.ModuleType | None:
+    """The sandmod module whose source gives ``name`` its value (an alias or a marker)."""
+    for module in [m for key, m in sorted(sys.modules.items()) if key.startswith("sandmod.") and key != "sandmod.api"]:
+        if getattr(module, name, None) is thing and _source_line(inspect.getsource(module).splitlines(), name):
+            return module
+    return None
+
+
+def _alias(name: str, thing: Any) -> tuple[str, str]:
+    """An alias of a type or a marker: its definition as code (for an alias) and its ``#:`` text."""
+    short = name.rsplit(".", 1)[-1]
+    module = _defined_in(short, thing)
+    lines = inspect.getsource(module).splitlines() if module else []
+    code = _source_line(lines, short)[1].replace('"', "") if module and typing.get_origin(thing) is not None else ""
+    return code, _comment(lines, short)
+
+
+def _python_type(annotation: Any) -> str:
+    """A type as Python source writes it, its validation rules (``Annotated``) left out."""
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if isinstance(annotation, (str, typing.ForwardRef)):
+        return getattr(annotation, "__forward_arg__", annotation).strip("'\"")
+    if isinstance(annotation, list):  # a Callable's arguments
+        return "[" + ", ".join(map(_python_type, annotation)) + "]"
+    if origin is Annotated:
+        return _python_type(args[0])
+    if origin in (Union, types.UnionType):
+        return " | ".join(map(_python_type, args))
+    if origin is Literal:
+        return f"Literal[{', '.join(map(repr, args))}]"
+    if origin is not None:
+        return f"{_python_type(origin)}[{', '.join(map(_python_type, args))}]"
+    names = {type(None): "None", Ellipsis: "..."}
+    return names.get(annotation) or getattr(annotation, "__name__", None) or str(annotation).replace("typing.", "")
+
+
+def _attributes(cls: type) -> list[tuple[str, str, str]]:
+    """A class's public attributes and properties: (name, type, a line of text), in the order its
+    source gives them. The text of an annotated name is its pydantic description or its comment."""
+    found: dict[str, tuple[str, str]] = {}
+    for klass in [k for k in reversed(cls.__mro__) if k.__module__.startswith("sandmod")]:
+        lines = inspect.getsource(klass).splitlines()
+        fields = getattr(klass, "model_fields", {})
+        for name, annotation in vars(klass).get("__annotations__", {}).items():
+            if not name.startswith("_") and typing.get_origin(annotation) is not typing.ClassVar:
+                text = fields[name].description if name in fields and fields[name].description else _comment(lines, name, "    ")
+                found[name] = (_python_type(fields[name].annotation if name in fields else annotation), text)
+        for name, value in vars(klass).items():
+            if isinstance(value, property) and not name.startswith("_"):
+                found[name] = (_python_type(inspect.signature(value.fget).return_annotation), (inspect.getdoc(value) or "").split("\n\n")[0])
+    return [(name, kind, " ".join(text.split())) for name, (kind, text) in found.items()]
+
+
+def _attribute_table(name: str, cls: type) -> list[str]:
+    """A class's attributes as a table, each row with an anchor of its own; nothing when it has none."""
+    rows = [
+        f'| <a id="{_slug(f"{name}.{attribute}")}"></a>`{attribute}` | <code>{_cell(_code(kind))}</code> | {_cell(_markdown(text))} |'
+        for attribute, kind, text in _attributes(cls)
+    ]
+    return ["| attribute | type | what |", "|---|---|---|", *rows, ""] if rows else []
+
+
+def _entry(title: str, code: str, text: str, level: str = "###") -> list[str]:
+    """A heading with the name alone and an anchor, the code (a signature) below it, then the text."""
+    out = [f"{level} `{title}` {{#{_slug(title)}}}", ""]
+    if code:
+        out += [f'<pre class="signature"><code>{_code(code)}</code></pre>', ""]
     return out + [text.strip(), ""]
 
 
-def _documented(name: str, thing: Any, module: types.ModuleType | None = None) -> list[str]:
-    """The entry of a public name, and of a class's public methods and properties."""
-    own = getattr(thing, "__module__", "").startswith("sandmod") or inspect.isclass(thing)
-    text = _markdown(inspect.getdoc(thing), whole=True) if own and inspect.getdoc(thing) else ""
-    if not text and module is not None:
-        text = _attribute_doc(module, name.rsplit(".", 1)[-1])
-    out = _entry(name, thing, text)
+def _call(title: str, thing: Any) -> str:
+    """How a function or class is called, as code: ``name(arguments) -> result``; empty for what is not called."""
+    signature = _signature(thing)
+    kind = "class " if inspect.isclass(thing) else ""
+    return f"{kind}{title.rsplit('.', 1)[-1]}{signature}" if signature else ""
+
+
+def _documented(name: str, thing: Any) -> list[str]:
+    """The entry of a public name, and of a class's public attributes and methods."""
+    if not (inspect.isclass(thing) or inspect.isfunction(thing)):
+        return _entry(name, *_alias(name, thing))
+    out = _entry(name, _call(name, thing), _markdown(inspect.getdoc(thing), whole=True))
     if inspect.isclass(thing) and thing.__module__.startswith("sandmod"):
+        out += _attribute_table(name, thing)
         for member, value in vars(thing).items():
-            if member.startswith("_"):
-                continue
-            if isinstance(value, property):
-                out += [f"#### `{name}.{member}`", "", _markdown(inspect.getdoc(value), whole=True), ""]
-            elif inspect.isfunction(value):
-                out += _entry(f"{name}.{member}", value, _markdown(inspect.getdoc(value), whole=True), "####")
+            if inspect.isfunction(value) and not member.startswith("_"):
+                out += _entry(f"{name}.{member}", _call(member, value), _markdown(inspect.getdoc(value), whole=True), "####")
     return out
 
 
 def api_reference() -> str:
     """What ``import sandmod`` gives, what plugin authors import from ``sandmod.api``, and the hooks."""
-    import sandmod
     from sandmod import api, hooks
 
-    out = ["## `import sandmod`", ""]
-    for name in sandmod.__all__:
-        if name != "__version__":
-            out += _documented(f"sandmod.{name}", getattr(sandmod, name))
-    out += ["## `sandmod.api`, for plugin authors", "", _markdown(inspect.getdoc(api), whole=True), ""]
-    for name in api.__all__:
-        out += _documented(f"sandmod.api.{name}", getattr(api, name), hooks)
+    first: dict[int, str] = {}  # each thing's first name: a second one points to its entry
+    sections: dict[bool, list[str]] = {False: [], True: []}  # by whether it is sandmod.api's
+    for name, thing in _public_names():
+        earlier = first.setdefault(id(thing), name)
+        same = _entry(name, "", f"The same as [`{earlier}`](#{_slug(earlier)}).")
+        sections[name.startswith("sandmod.api.")] += _documented(name, thing) if earlier == name else same
+    out = ["## `import sandmod`", "", *sections[False]]
+    out += ["## `sandmod.api`, for plugin authors", "", _markdown(inspect.getdoc(api), whole=True), "", *sections[True]]
     out += ["## Hooks", "", _markdown(inspect.getdoc(hooks), whole=True), ""]
     for name in hook_names():
-        out += _entry(name, getattr(hooks, name), _markdown(inspect.getdoc(getattr(hooks, name)), whole=True))
+        hook = getattr(hooks, name)
+        out += _entry(name, _call(name, hook), _markdown(inspect.getdoc(hook), whole=True))
     return "\n".join(out)
 
 
@@ -564,13 +690,24 @@ def gallery_page(name: str) -> str:
     return "\n".join(out)
 
 
+def _first_sentence(text: str) -> str:
+    found = re.match(r".+?[.!?](?=\s|$)", text)
+    return found.group(0) if found else text
+
+
+def _card(name: str) -> list[str]:
+    """An example world as a card of the gallery: its animation (the command that made it said on
+    hovering), its name and its first sentence, each a link to its page."""
+    about = _comment_markdown((ROOT / "examples" / f"{name}.toml").read_text(encoding="utf-8"))[0]
+    words = name.replace("_", " ")
+    return [f'-   [![{words}](../images/{name}.webp){{ loading=lazy }}]({name}.md "made by {_render_command(name)}")', "",
+            f"    **[{words.capitalize()}]({name}.md)**: {_first_sentence(about)}", ""]
+
+
 def gallery_index() -> str:
-    """Every example world: its name, its first sentence, a link to its page."""
-    rows = ["| world | what it shows |", "|---|---|"]
-    for name in example_worlds():
-        about = _comment_markdown((ROOT / "examples" / f"{name}.toml").read_text(encoding="utf-8"))[0]
-        rows.append(f"| [{name.replace('_', ' ')}]({name}.md) | {about} |")
-    return "\n".join(rows)
+    """Every example world as a card: its picture, its name, its first sentence, a link to its page."""
+    cards = [line for name in example_worlds() for line in _card(name)]
+    return "\n".join(['<div class="grid cards" markdown>', "", *cards, "</div>"])
 
 
 def changelog() -> str:
