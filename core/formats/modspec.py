@@ -166,7 +166,7 @@ class Cooled(_Strict):
     ``latent_heat``, its heat plus that)."""
 
     below: Temperature = Field(description="Degrees Celsius; colder than this, it changes.")
-    becomes: ElementName = Field(description="The element it turns into (lava: 'stone').")
+    becomes: ElementName = Field(description="The element it turns into (lava: 'basalt').")
     latent_heat: float | None = Field(None, ge=0.0, le=1e6, description=_LATENT)
     spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD, examples=[20])
 
@@ -249,7 +249,7 @@ class _ElementBase(_Strict):
         0.0, ge=0.0, le=0.5, description="Share of its difference from the air's temperature lost each frame (heat leaving the world)."
     )
     heated: Heated | None = Field(None, description="What it becomes above a temperature (water boils to steam).")
-    cooled: Cooled | None = Field(None, description="What it becomes below a temperature (lava cools to stone).")
+    cooled: Cooled | None = Field(None, description="What it becomes below a temperature (lava sets into basalt).")
     flammable: Flammable | None = Field(None, description="How it catches fire and burns.")
     explosion: Explosion | None = Field(
         None, description="It explodes instead of burning when lit or hot (needs 'flammable' to say when)."
