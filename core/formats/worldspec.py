@@ -7,6 +7,7 @@
     height = 120
     seed = 7
     mods = ["sand", "water"]      # leave out to load every mod found
+    mod_folders = ["my-mods"]     # more mods, in folders inside the world file's
     gravity = 1.0                  # scales every element's gravity
 
     [[scene]]                      # painted in order, later shapes on top
@@ -99,6 +100,15 @@ class WorldInfo(_Strict):
     seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice; same seed, same frames.", examples=[42])
     mods: list[ModName] | None = Field(
         None, description="Mods to load (with what they require, and 'base'); all that are found if left out."
+    )
+    mod_folders: list[Annotated[str, Field(min_length=1)]] = Field(
+        default_factory=list,
+        max_length=16,
+        description="More folders of mods, besides a 'mods' folder beside the world file, './mods' and '--mods': "
+        "each relative to the world file's folder and inside it (no absolute path, no '..' out, no symlink out), "
+        "so a world file reads mods only from the folder the user named it in. "
+        "'sandmod play' writes it when a session it saves needs mods from elsewhere.",
+        examples=[["my-mods"]],
     )
     gravity: float = Field(
         1.0,
