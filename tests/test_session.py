@@ -10,7 +10,7 @@ import pytest
 from sandmod.errors import ProblemsError
 from sandmod.jobs.benchmark import state_digest
 from sandmod.jobs import session as session_module
-from sandmod.jobs.session import Session, SessionFull
+from sandmod.jobs.session import Session
 from sandmod.jobs.undo import History
 from sandmod.world.loading import load_world
 
@@ -158,16 +158,41 @@ def test_undo_keeps_the_blocks_each_action_changed_within_its_budget(tmp_path):
     assert small.points == []
 
 
-def test_a_full_session_refuses_more_and_what_it_saved_replays(tmp_path, monkeypatch):
+def test_a_full_session_goes_on_unrecorded_and_what_it_saved_replays(tmp_path, monkeypatch):
     monkeypatch.setattr(session_module, "MAX_EVENTS", 3)
     session = Session.open(None, size=(48, 40))
     for number in range(3):
-        session.add("paint", {"shape": "circle", "x": 10 + 5 * number, "y": 5, "radius": 2, "element": "sand"})
+        assert session.add("paint", {"shape": "circle", "x": 10 + 5 * number, "y": 5, "radius": 2, "element": "sand"})
         session.step()
-    with pytest.raises(SessionFull):
-        session.add("paint", {"shape": "circle", "x": 40, "y": 5, "radius": 2, "element": "sand"})
+    recorded = state_digest(session.world)
+    assert not session.add("paint", {"shape": "circle", "x": 40, "y": 5, "radius": 2, "element": "sand"})
+    assert session.full_at == 3 and len(session.events) == 3
     session.step()
+    assert state_digest(session.world) != recorded  # the stroke past the limit is in the world
     session.save(Path("s.toml"))
+    assert "the session was full at frame 3: it replays up to there" in session.caveats
     replay = load_world("s.toml")
+    assert replay.spec.render.frames == 3
     replay.world.run(replay.spec.render.frames)
-    assert state_digest(replay.world) == state_digest(session.world)
+    assert state_digest(replay.world) == recorded
+
+
+def test_undo_back_before_the_session_was_full_records_again(tmp_path, monkeypatch):
+    monkeypatch.setattr(session_module, "MAX_EVENTS", 1)
+    session = Session.open(None, size=(48, 40))
+    session.checkpoint("paint")
+    assert session.add("paint", {"shape": "circle", "x": 10, "y": 5, "radius": 2, "element": "sand"})
+    session.step()
+    session.checkpoint("paint")
+    assert not session.add("paint", {"shape": "circle", "x": 20, "y": 5, "radius": 2, "element": "sand"})
+    session.step()
+    assert session.undo() == "paint" and session.full_at is None and session.caveats == []
+    assert session.world.counts()["sand:sand"] == load_world_after(session, 1)
+
+
+def load_world_after(session: Session, frames: int) -> int:
+    """The sand a replay of the session's saved file holds after ``frames`` frames."""
+    session.save(Path("u.toml"))
+    replay = load_world("u.toml")
+    replay.world.run(frames)
+    return replay.world.counts()["sand:sand"]
