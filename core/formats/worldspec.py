@@ -73,7 +73,7 @@ MAX_SIZE = 16384
 
 #: Most entries in each of a world's lists (scene, emitters, sprays, explosions, timeline).
 MAX_ITEMS = 10000
-#: Most timeline events (a played session's record: about 40,000 strokes fit the 4 MB a world file may take).
+#: Most timeline events (a played session's record fills the 4 MB a world file may take first, at about 21,000 moves).
 MAX_TIMELINE = 50000
 #: Most frames a render simulates (a played session: about 4.6 hours at 60 a second).
 MAX_FRAMES = 1000000
