@@ -196,3 +196,40 @@ def load_world_after(session: Session, frames: int) -> int:
     replay = load_world("u.toml")
     replay.world.run(frames)
     return replay.world.counts()["sand:sand"]
+
+
+GOO = '[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n'
+PICTURED = WORLD.replace('mods = ["sand", "water", "explosives"]', 'mods = ["sand", "water", "explosives", "goo"]') + """
+[[scene]]
+shape = "image"
+file = "pictures/level.png"
+x = 10
+y = 10
+legend = { "#ff0000" = "goo" }
+"""
+
+
+def test_a_session_saved_anywhere_brings_its_mods_and_pictures(tmp_path):
+    from PIL import Image
+
+    shared = tmp_path / "shared"
+    (shared / "mods").mkdir(parents=True)
+    (shared / "pictures").mkdir()
+    (shared / "mods" / "slime.toml").write_text(GOO)  # a file not named after its mod
+    Image.new("RGB", (8, 4), "#ff0000").save(shared / "pictures" / "level.png")
+    (shared / "w.toml").write_text(PICTURED)
+    session = Session.open(shared / "w.toml")
+    played(session)
+    for saved, mods, picture in [
+        (tmp_path / "away" / "w-session.toml", "w-session-mods", "w-session-pictures/pictures/level.png"),  # copies beside it
+        (tmp_path / "w-session.toml", "shared/mods", "shared/pictures/level.png"),  # under its folder: named
+    ]:
+        saved.parent.mkdir(exist_ok=True)
+        session.save(saved)
+        text = saved.read_text()
+        assert f'mod_folders = [\n    "{mods}",\n]' in text and f'file = "{picture}"' in text
+        replay = load_world(saved)  # the current folder has no mods/: only what the file names is found
+        replay.world.run(replay.spec.render.frames)
+        assert state_digest(replay.world) == state_digest(session.world) and replay.world.counts()["goo:goo"] > 0
+    assert (tmp_path / "away" / "w-session-mods" / "slime.toml").read_text() == GOO
+    assert not (tmp_path / "w-session-mods").exists() and not (tmp_path / "w-session-pictures").exists()

@@ -10,6 +10,7 @@ This module knows nothing of windows: :mod:`sandmod.jobs.play` drives it.
 
 from __future__ import annotations
 
+import os
 import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -19,6 +20,7 @@ import numpy as np
 import tomli_w
 
 from ..errors import ProblemsError
+from ..formats.recording import atomic_path
 from ..formats.tomlsource import TomlSource
 from ..formats.userfiles import MAX_TEXT_BYTES
 from ..formats.validation import validate
@@ -301,16 +303,24 @@ class Session:
 
     # --- the record ---------------------------------------------------------------------------
 
-    def world_file(self, folders: list[str] | None = None) -> str:
+    def world_file(self, folders: list[str] | None = None, pictures: dict[str, str] | None = None) -> str:
         """The session as a world file: the starting world, with every event of the session in its
-        timeline, loading mods from ``folders`` too (relative to where it is written; None: as the
-        starting world does). ``sandmod render`` of it makes the session's frames, bit for bit, up to
-        the frame the record was full at, if it was."""
+        timeline, loading mods from ``folders`` too and its pictures from where ``pictures`` says
+        (relative to where it is written; None: as the starting world does). ``sandmod render`` of it
+        makes the session's frames, bit for bit, up to the frame the record was full at, if it was."""
         data = dict(self.data)
         if folders is not None:
             world = {k: v for k, v in data["world"].items() if k != "mod_folders"}
             data["world"] = {**world, "mod_folders": folders} if folders else world
-        data["timeline"] = [*self.data.get("timeline", []), *self.events]
+        pictures = pictures or {}
+
+        def moved(table: dict[str, Any]) -> dict[str, Any]:
+            return {**table, "file": pictures[table["file"]]} if _picture(table) in pictures else table
+
+        if "scene" in data:
+            data["scene"] = [moved(shape) for shape in data["scene"]]
+        timeline = [{**e, "paint": moved(e["paint"])} if "paint" in e else e for e in self.data.get("timeline", [])]
+        data["timeline"] = [*timeline, *self.events]
         render = dict(data.get("render", {}))
         render["frames"] = max(self.world.frame if self.full_at is None else self.full_at, 1)
         data["render"] = render
@@ -318,38 +328,65 @@ class Session:
 
     def save(self, path: Path) -> None:
         """Write :meth:`world_file` to ``path``, whole or not at all (WriteError if it cannot be), so
-        that it renders there: the player's mods that render would not find from there are copied into
-        ``NAME-mods`` beside it. :attr:`caveats` says why it would not replay the session bit for bit."""
-        from ..formats.recording import atomic_path
-
+        that it renders there: the player's mods and the world's pictures that render would not find
+        from there are copied beside it, into ``NAME-mods`` and ``NAME-pictures``. :attr:`caveats` says
+        why it would not replay the session bit for bit."""
         path = Path(path)
-        folders = self._bring_mods(path)
+        folders, pictures = self._bring_mods(path), self._bring_pictures(path)
         with atomic_path(path) as temporary:
-            temporary.write_text(self.world_file(folders), encoding="utf-8")
+            temporary.write_text(self.world_file(folders, pictures), encoding="utf-8")
         self.saved_changes = self.changes
         self.saved_events = list(self.events)
 
     def _bring_mods(self, path: Path) -> list[str]:
         """The ``mod_folders`` a world file at ``path`` needs to load the player's mods (those no plugin
-        brings): each mod's folder if it lies under ``path``'s folder, else a copy of the mod, as it was
-        loaded, in ``NAME-mods`` beside it (written here)."""
-        from ..formats.recording import atomic_path
-
+        brings): each mod's folder if it lies under ``path``'s folder, else a copy of its file, as it
+        was loaded, in ``NAME-mods`` beside it (written here)."""
         home = path.parent.resolve()
         named: list[str] = []
-        copies: dict[str, str] = {}
+        copies: dict[str, bytes] = {}
         for mod in self.world.ruleset.mods:
             file = mod.source.path
             if mod.plugin != "user" or file is None or file.parent == (home / "mods").resolve():
                 continue
             if home in file.parent.parents:
                 named.append(file.parent.relative_to(home).as_posix())
-            else:
-                copies[f"{mod.name}{file.suffix}"] = mod.source.text if file.suffix == ".toml" else file.read_text(encoding="utf-8")
+                continue
+            name = file.name if file.name not in copies else f"{mod.name}-{file.name}"  # the same name: a copy render takes for the same mod
+            copies[name] = mod.source.text.encode("utf-8") if file.suffix == ".toml" else file.read_bytes()
         if copies:
-            folder = path.parent / f"{path.stem}-mods"
-            for name, text in copies.items():
-                with atomic_path(folder / name) as temporary:
-                    temporary.write_text(text, encoding="utf-8")
-            named.append(folder.name)
+            named.append(_carry(copies, path.parent / f"{path.stem}-mods").name)
         return list(dict.fromkeys(named))
+
+    def _bring_pictures(self, path: Path) -> dict[str, str]:
+        """Where a world file at ``path`` finds each picture the starting world paints (by the name it
+        gives): under ``path``'s folder, or a copy in ``NAME-pictures`` beside it (written here)."""
+        folder = self.loaded.source.folder
+        home = path.parent.resolve()
+        if folder is None or folder.resolve() == home:
+            return {}
+        tables = [*self.data.get("scene", []), *(e.get("paint", {}) for e in self.data.get("timeline", []))]
+        found, copies = {}, {}
+        for written in dict.fromkeys(filter(None, map(_picture, tables))):
+            real = (folder / written).resolve()
+            if home in real.parents:
+                found[written] = real.relative_to(home).as_posix()
+            else:
+                copies[os.path.normpath(written)] = real.read_bytes()
+                found[written] = f"{path.stem}-pictures/{Path(os.path.normpath(written)).as_posix()}"
+        if copies:
+            _carry(copies, path.parent / f"{path.stem}-pictures")
+        return found
+
+
+def _picture(table: Any) -> str | None:
+    """The file a world file's shape paints, if it is a picture."""
+    return table.get("file") if isinstance(table, dict) and table.get("shape") == "image" else None
+
+
+def _carry(files: dict[str, bytes], folder: Path) -> Path:
+    """``files`` (relative name: contents) written into ``folder``, each whole or not at all."""
+    for name, contents in files.items():
+        with atomic_path(folder / name) as temporary:
+            temporary.write_bytes(contents)
+    return folder
