@@ -466,6 +466,14 @@ def test_the_close_button_with_nowhere_to_write_says_where_the_session_went_and_
     assert replayed(written[0]).counts()["sand:sand"] > 20
 
 
+def test_the_close_button_saves_and_the_terminal_says_where(tmp_path, monkeypatch):
+    scripted_close(monkeypatch)
+    result = CliRunner().invoke(cli, ["play", "--size", "40x30"])
+    assert result.exit_code == 0 and result.stderr == ""
+    assert result.stdout.splitlines()[-1] == "saved play-session.toml: sandmod render play-session.toml replays it"
+    assert "paint" in (tmp_path / "play-session.toml").read_text()
+
+
 def test_past_the_sessions_limit_painting_goes_on_and_what_was_saved_replays(monkeypatch):
     play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
     drag(play, [(5, 5), (20, 5)])

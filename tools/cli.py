@@ -869,7 +869,7 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
         click.echo(shown.not_saved, err=True)
         sys.exit(1)
     if shown.saved_to is not None:
-        click.echo(shown.message)
+        click.echo(shown.saved_message)
 
 
 @cli.command()

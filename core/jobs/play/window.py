@@ -71,6 +71,7 @@ class Play:
         self.captured: deque = deque(maxlen=CAPTURE_SECONDS * DISPLAY_FPS // 2)
         self.capture_job: Capture | None = None
         self.saved_to: Path | None = None
+        self.saved_message = ""  # what the last save said (the command line prints it when the window closes)
         self.not_saved = ""  # why the session closed without being saved where asked (and where it went instead)
         self.due = 0.0
         self.next_mod_check = 0.0
@@ -401,7 +402,8 @@ class Play:
             return
         caveat = self.session.caveats
         replays = f"does not replay bit for bit ({'; '.join(caveat)})" if caveat else "replays it"
-        self.say(f"saved {self.saved_to}: sandmod render {display_path(self.saved_to)} {replays}")
+        self.saved_message = f"saved {self.saved_to}: sandmod render {display_path(self.saved_to)} {replays}"
+        self.say(self.saved_message)
 
     def _places(self) -> str:
         return ", ".join(str(place.absolute()) for place in self.places)
