@@ -36,7 +36,7 @@ DEFAULT_SIZE = (320, 200)
 #: Events the record holds: a world file's timeline can hold no more.
 MAX_EVENTS = MAX_TIMELINE
 #: The record's size in a world file, beside the starting file (what a world file may hold, less a margin).
-#: It binds first: a stroke of a few moves takes about 180 bytes, so about 21,000 strokes fill it.
+#: It binds before MAX_EVENTS: a stroke's move takes about 185 bytes, so about 21,000 moves fill it.
 MAX_RECORD_BYTES = MAX_TEXT_BYTES - 256 * 2**10
 
 
