@@ -457,19 +457,19 @@ def test_the_close_button_with_nowhere_to_write_says_where_the_session_went_and_
         tmp_path.chmod(0o755)
         home.chmod(0o755)
     assert result.exit_code == 1 and result.stdout == ""
+    said = result.stderr.splitlines()[-1]  # after what compiling the kernels said, if it had to
     written = list((tmp_path / "tmp").glob("sandmod-play-*/play-session.toml"))
     if temporary == "gone":
-        assert written == [] and result.stderr == (
-            f"the session was not saved: not in {tmp_path}, {home}, nor in a temporary folder (No such file or directory)\n")
+        assert written == [] and said == f"the session was not saved: not in {tmp_path}, {home}, nor in a temporary folder (No such file or directory)"
         return
-    assert result.stderr == f"the session was not saved in {tmp_path}, {home}; it was written to {written[0]} instead\n"
+    assert said == f"the session was not saved in {tmp_path}, {home}; it was written to {written[0]} instead"
     assert replayed(written[0]).counts()["sand:sand"] > 20
 
 
 def test_the_close_button_saves_and_the_terminal_says_where(tmp_path, monkeypatch):
     scripted_close(monkeypatch)
     result = CliRunner().invoke(cli, ["play", "--size", "40x30"])
-    assert result.exit_code == 0 and result.stderr == ""
+    assert result.exit_code == 0 and "not saved" not in result.stderr
     assert result.stdout.splitlines()[-1] == "saved play-session.toml: sandmod render play-session.toml replays it"
     assert "paint" in (tmp_path / "play-session.toml").read_text()
 
