@@ -125,9 +125,9 @@ class Session:
                     self._forget_last()
                 self._record(joined or event)
                 return True
-            self.full_at = self.world.frame
         self._apply(event)
         self._added = None
+        self.full_at = self.world.frame if self.full_at is None else self.full_at
         return False
 
     def _fits(self, event: dict[str, Any], joins: bool) -> bool:
