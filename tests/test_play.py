@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -12,8 +13,10 @@ from click.testing import CliRunner
 
 pygame = pytest.importorskip("pygame")
 
+from sandmod.jobs import session as session_module  # noqa: E402
 from sandmod.jobs.benchmark import state_digest  # noqa: E402
 from sandmod.jobs.play import Play  # noqa: E402
+from sandmod.jobs.play.view import PANEL, TEXT  # noqa: E402
 from sandmod.jobs.session import Session  # noqa: E402
 from sandmod.tools.cli import cli  # noqa: E402
 from sandmod.world.loading import load_world  # noqa: E402
@@ -383,3 +386,161 @@ def test_consecutive_moves_of_one_stroke_on_a_frame_are_one_event():
     for _ in range(replay.spec.render.frames):
         replay.world.step()
     assert state_digest(replay.world) == state_digest(play.session.world)
+
+
+# --- play never loses work ---------------------------------------------------------------------
+
+def read_only(folder: Path, name: str) -> None:
+    """Make writing ``name`` into ``folder`` fail, as in a read-only folder: its mode, and (since root
+    ignores modes) a folder where the file would go."""
+    (folder / name).mkdir()
+    folder.chmod(0o555)
+
+
+def replayed(path: Path):
+    """The world file at ``path``, rendered to its last frame (its mods found only as render finds them)."""
+    replay = load_world(path)
+    replay.world.run(replay.spec.render.frames)
+    return replay.world
+
+
+def test_a_session_saved_away_from_a_read_only_world_renders_where_it_is_saved(tmp_path, monkeypatch):
+    shared, here = tmp_path / "shared", tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    (shared / "mods").mkdir(parents=True)
+    (shared / "mods" / "goo.toml").write_text(GOO)
+    (shared / "w.toml").write_text('[world]\nwidth = 40\nheight = 30\nmods = ["goo"]\n')
+    read_only(shared, "w-session.toml")
+    try:
+        play = Play(Session.open(shared / "w.toml"), scale=SCALE, fixed_steps=1, session_path=shared / "w-session.toml")
+        drag(play, [(5, 5), (30, 5)])
+        frames(play, 5)
+        key(play, pygame.K_SPACE)  # paused, so that the world is at the frame saved
+        key(play, pygame.K_s)
+    finally:
+        shared.chmod(0o755)
+    assert play.saved_to == here / "w-session.toml"  # the current folder: shared/ would not take it
+    assert play.message == f"saved {play.saved_to}: sandmod render w-session.toml replays it"
+    assert (here / "w-session-mods" / "goo.toml").read_text() == GOO and not Path("mods").exists()
+    result = CliRunner().invoke(cli, ["render", "w-session.toml", "-q"])
+    assert result.exit_code == 0, result.output
+    assert state_digest(replayed(here / "w-session.toml")) == state_digest(play.session.world)
+    assert play.session.world.counts()["goo:goo"] > 20
+
+
+def scripted_close(monkeypatch) -> None:
+    """Each window the command line opens gets a stroke, then the close button."""
+    run = Play.run
+
+    def closed(self, frames=None):
+        post(pygame.MOUSEBUTTONDOWN, pos=at(5, 5, self), button=1)
+        post(pygame.MOUSEBUTTONUP, pos=at(20, 5, self), button=1)
+        post(pygame.QUIT)
+        run(self, frames)
+
+    monkeypatch.setattr(Play, "run", closed)
+
+
+@pytest.mark.parametrize("temporary", ["tmp", "gone"])
+def test_the_close_button_with_nowhere_to_write_says_where_the_session_went_and_exits_1(tmp_path, monkeypatch, temporary):
+    home = tmp_path / "home"
+    home.mkdir()
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / temporary))
+    scripted_close(monkeypatch)
+    read_only(home, "play-session.toml")
+    read_only(tmp_path, "play-session.toml")
+    try:
+        result = CliRunner().invoke(cli, ["play", "--size", "40x30"])
+    finally:
+        tmp_path.chmod(0o755)
+        home.chmod(0o755)
+    assert result.exit_code == 1 and result.stdout == ""
+    said = result.stderr.splitlines()[-1]  # after what compiling the kernels said, if it had to
+    written = list((tmp_path / "tmp").glob("sandmod-play-*/play-session.toml"))
+    if temporary == "gone":
+        assert written == [] and said == f"the session was not saved: not in {tmp_path}, {home}, nor in a temporary folder (No such file or directory)"
+        return
+    assert said == f"the session was not saved in {tmp_path}, {home}; it was written to {written[0]} instead"
+    assert replayed(written[0]).counts()["sand:sand"] > 20
+
+
+def test_the_close_button_saves_and_the_terminal_says_where(tmp_path, monkeypatch):
+    scripted_close(monkeypatch)
+    result = CliRunner().invoke(cli, ["play", "--size", "40x30"])
+    assert result.exit_code == 0 and "not saved" not in result.stderr
+    assert result.stdout.splitlines()[-1] == "saved play-session.toml: sandmod render play-session.toml replays it"
+    assert "paint" in (tmp_path / "play-session.toml").read_text()
+
+
+def test_past_the_sessions_limit_painting_goes_on_and_what_was_saved_replays(monkeypatch):
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    drag(play, [(5, 5), (20, 5)])
+    frames(play, 3)
+    monkeypatch.setattr(session_module, "MAX_RECORD_BYTES", play.session.record_bytes)  # full: as a real session fills up
+    full, at_full = play.session.world.frame, state_digest(play.session.world)
+    play.brush.element = play.session.world.ruleset.index("stone")
+    drag(play, [(5, 30), (40, 30)])
+    assert play.message == f"session full: painting goes on, but strokes from frame {full} on are not saved (s saves the rest)"
+    away(play)
+    frames(play, 2)
+    stone = (play.session.world.cells == play.brush.element).sum()
+    assert stone > 50 and wrong_cells(play) == 0  # in the world, and on the screen
+    play.do_save()
+    assert play.message.endswith(f"does not replay bit for bit (the session was full at frame {full}: it replays up to there)")
+    assert state_digest(replayed(Path("play-session.toml"))) == at_full
+
+
+def test_the_quit_prompt_counts_what_is_not_saved():
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    drag(play, [(5, 5), (20, 5)])
+    drag(play, [(5, 15), (20, 15)])
+    key(play, pygame.K_s)
+    drag(play, [(5, 25), (20, 25)])
+    key(play, pygame.K_ESCAPE)
+    assert play.prompt.startswith("1 action not saved:") and play.view.said[0][0].startswith("1 action not saved:")
+    key(play, pygame.K_a)
+    key(play, pygame.K_z, pygame.KMOD_CTRL)
+    key(play, pygame.K_z, pygame.KMOD_CTRL)
+    key(play, pygame.K_ESCAPE)
+    assert play.prompt.startswith("1 undone action not saved:")
+
+
+def test_a_long_message_is_drawn_whole_in_lines_that_fit_the_window(tmp_path):
+    (tmp_path / "home").mkdir()
+    read_only(tmp_path / "home", "w-session.toml")
+    read_only(tmp_path, "w-session.toml")
+    try:
+        play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1, session_path=Path("/proc/w-session.toml"))
+        drag(play, [(5, 5), (20, 5)])
+        key(play, pygame.K_s)
+    finally:
+        tmp_path.chmod(0o755)
+        (tmp_path / "home").chmod(0o755)
+    view, message = play.view, play.message
+    assert message.startswith(f"could not save w-session.toml in /proc, {tmp_path}, {tmp_path / 'home'}: ")
+    assert view.size[0] == 640 and view.font.size(message)[0] > 640 and len(view.said) > 1
+    assert "".join(line for line, _ in view.said) == message
+    screen = pygame.surfarray.array3d(view.screen)
+    for line, rect in view.said:
+        assert 0 <= rect.left and rect.right <= view.size[0] - 6, line
+        drawn = pygame.Surface(rect.size)
+        drawn.fill(PANEL)
+        drawn.blit(view.font.render(line, True, TEXT), (0, 0))
+        assert (pygame.surfarray.array3d(drawn) == screen[rect.left : rect.right, rect.top : rect.bottom]).all(), line
+
+
+DEFAULTS = {"acid_wall": "acid:acid", "boiling_pool": "lava:lava", "forest_fire": "dirt:dirt", "lava_lake": "lava:lava"}
+
+
+@pytest.mark.parametrize("world", sorted(p for p in Path(__file__).parent.parent.glob("examples/*.toml") if "[sweep]" not in p.read_text()), ids=lambda p: p.stem)
+def test_each_example_starts_with_a_brush_of_its_own_story(world):
+    play = Play(Session.open(world), scale=1, fixed_steps=1)
+    ruleset = play.session.world.ruleset
+    chosen = ruleset.elements[play.brush.element]
+    assert chosen.id == DEFAULTS.get(world.stem, "sand:sand")
+    assert chosen.mod in play.session.loaded.spec.world.mods and chosen.spec.archetype in ("powder", "liquid")
+    away(play)
+    frames(play, 1)
+    assert f"   {chosen.name} 5" in play._status()

@@ -10,7 +10,7 @@ import pytest
 from sandmod.errors import ProblemsError
 from sandmod.jobs.benchmark import state_digest
 from sandmod.jobs import session as session_module
-from sandmod.jobs.session import Session, SessionFull
+from sandmod.jobs.session import Session
 from sandmod.jobs.undo import History
 from sandmod.world.loading import load_world
 
@@ -158,16 +158,78 @@ def test_undo_keeps_the_blocks_each_action_changed_within_its_budget(tmp_path):
     assert small.points == []
 
 
-def test_a_full_session_refuses_more_and_what_it_saved_replays(tmp_path, monkeypatch):
+def test_a_full_session_goes_on_unrecorded_and_what_it_saved_replays(tmp_path, monkeypatch):
     monkeypatch.setattr(session_module, "MAX_EVENTS", 3)
     session = Session.open(None, size=(48, 40))
     for number in range(3):
-        session.add("paint", {"shape": "circle", "x": 10 + 5 * number, "y": 5, "radius": 2, "element": "sand"})
+        assert session.add("paint", {"shape": "circle", "x": 10 + 5 * number, "y": 5, "radius": 2, "element": "sand"})
         session.step()
-    with pytest.raises(SessionFull):
-        session.add("paint", {"shape": "circle", "x": 40, "y": 5, "radius": 2, "element": "sand"})
+    recorded = state_digest(session.world)
+    assert not session.add("paint", {"shape": "circle", "x": 40, "y": 5, "radius": 2, "element": "sand"})
+    assert session.full_at == 3 and len(session.events) == 3
     session.step()
+    assert state_digest(session.world) != recorded  # the stroke past the limit is in the world
     session.save(Path("s.toml"))
+    assert "the session was full at frame 3: it replays up to there" in session.caveats
     replay = load_world("s.toml")
+    assert replay.spec.render.frames == 3
     replay.world.run(replay.spec.render.frames)
-    assert state_digest(replay.world) == state_digest(session.world)
+    assert state_digest(replay.world) == recorded
+
+
+def test_undo_back_before_the_session_was_full_records_again(tmp_path, monkeypatch):
+    monkeypatch.setattr(session_module, "MAX_EVENTS", 1)
+    session = Session.open(None, size=(48, 40))
+    session.checkpoint("paint")
+    assert session.add("paint", {"shape": "circle", "x": 10, "y": 5, "radius": 2, "element": "sand"})
+    session.step()
+    session.checkpoint("paint")
+    assert not session.add("paint", {"shape": "circle", "x": 20, "y": 5, "radius": 2, "element": "sand"})
+    session.step()
+    assert session.undo() == "paint" and session.full_at is None and session.caveats == []
+    assert session.world.counts()["sand:sand"] == load_world_after(session, 1)
+
+
+def load_world_after(session: Session, frames: int) -> int:
+    """The sand a replay of the session's saved file holds after ``frames`` frames."""
+    session.save(Path("u.toml"))
+    replay = load_world("u.toml")
+    replay.world.run(frames)
+    return replay.world.counts()["sand:sand"]
+
+
+GOO = '[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n'
+PICTURED = WORLD.replace('mods = ["sand", "water", "explosives"]', 'mods = ["sand", "water", "explosives", "goo"]') + """
+[[scene]]
+shape = "image"
+file = "pictures/level.png"
+x = 10
+y = 10
+legend = { "#ff0000" = "goo" }
+"""
+
+
+def test_a_session_saved_anywhere_brings_its_mods_and_pictures(tmp_path):
+    from PIL import Image
+
+    shared = tmp_path / "shared"
+    (shared / "mods").mkdir(parents=True)
+    (shared / "pictures").mkdir()
+    (shared / "mods" / "slime.toml").write_text(GOO)  # a file not named after its mod
+    Image.new("RGB", (8, 4), "#ff0000").save(shared / "pictures" / "level.png")
+    (shared / "w.toml").write_text(PICTURED)
+    session = Session.open(shared / "w.toml")
+    played(session)
+    for saved, mods, picture in [
+        (tmp_path / "away" / "w-session.toml", "w-session-mods", "w-session-pictures/pictures/level.png"),  # copies beside it
+        (tmp_path / "w-session.toml", "shared/mods", "shared/pictures/level.png"),  # under its folder: named
+    ]:
+        saved.parent.mkdir(exist_ok=True)
+        session.save(saved)
+        text = saved.read_text()
+        assert f'mod_folders = [\n    "{mods}",\n]' in text and f'file = "{picture}"' in text
+        replay = load_world(saved)  # the current folder has no mods/: only what the file names is found
+        replay.world.run(replay.spec.render.frames)
+        assert state_digest(replay.world) == state_digest(session.world) and replay.world.counts()["goo:goo"] > 0
+    assert (tmp_path / "away" / "w-session-mods" / "slime.toml").read_text() == GOO
+    assert not (tmp_path / "w-session-mods").exists() and not (tmp_path / "w-session-pictures").exists()

@@ -95,6 +95,29 @@ def test_a_world_file_cannot_read_a_picture_outside_its_folder(file):
     refused(invoke("validate", str(path)), "scene.0.file: the picture must")
 
 
+GOO = '[mod]\nname = "goo"\n\n[elements.goo]\narchetype = "liquid"\ncolor = "#00ff00"\ndensity = 900\ndispersion = 2\n'
+
+
+@pytest.mark.parametrize("folder, says", [
+    ("../secret-mods", "the mods folder must lie inside the world file's folder"),
+    ("/tmp", "the mods folder must be relative to the world file's folder (got an absolute path)"),
+    ("link", "the mods folder must lie inside the world file's folder"),
+    ("missing", "no folder 'missing' in home"),
+])
+def test_a_world_file_reads_mods_only_from_folders_inside_its_own(folder, says):
+    Path("secret-mods").mkdir()
+    Path("secret-mods/goo.toml").write_text(GOO)
+    Path("home").mkdir()
+    Path("home/link").symlink_to(Path("secret-mods").resolve())
+    path = world(SMALL.replace('mods = ["sand"]', f'mods = ["sand", "goo"]\nmod_folders = ["{folder}"]'), folder=Path("home"))
+    message = refused(invoke("render", str(path), "-q"), f"home/w.toml:6:1: world.mod_folders.0: {says}")
+    assert message.count("\n") == 1 and not Path("w.gif").exists()
+    Path("home/mine").mkdir()
+    Path("home/mine/goo.toml").write_text(GOO)
+    path.write_text(path.read_text().replace(f'"{folder}"', '"mine"'))
+    assert invoke("render", str(path), "-q", "--frames", "2").exit_code == 0  # inside: read
+
+
 def test_a_symlinked_world_takes_its_pictures_and_output_from_the_links_folder():
     picture = '\n[[scene]]\nshape = "image"\nfile = "level.png"\nlegend = { "#ff0000" = "sand" }\n'
     world(SMALL + picture + '\n[render]\nframes = 2\noutput = "out.gif"\n', folder=Path("elsewhere"))

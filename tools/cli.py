@@ -865,8 +865,11 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
     session_path = folder / f"{name}-session.toml"
     shown = window.Play(session, scale=scale, session_path=session_path, save_on_exit=save_session)
     shown.run()
+    if shown.not_saved:
+        click.echo(shown.not_saved, err=True)
+        sys.exit(1)
     if shown.saved_to is not None:
-        click.echo(shown.message)
+        click.echo(shown.saved_message)
 
 
 @cli.command()

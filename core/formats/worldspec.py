@@ -7,6 +7,7 @@
     height = 120
     seed = 7
     mods = ["sand", "water"]      # leave out to load every mod found
+    mod_folders = ["my-mods"]     # more mods, in folders inside the world file's
     gravity = 1.0                  # scales every element's gravity
 
     [[scene]]                      # painted in order, later shapes on top
@@ -72,7 +73,7 @@ MAX_SIZE = 16384
 
 #: Most entries in each of a world's lists (scene, emitters, sprays, explosions, timeline).
 MAX_ITEMS = 10000
-#: Most timeline events (a played session's record: about 40,000 strokes fit the 4 MB a world file may take).
+#: Most timeline events (a played session's record fills the 4 MB a world file may take first, at about 21,000 moves).
 MAX_TIMELINE = 50000
 #: Most frames a render simulates (a played session: about 4.6 hours at 60 a second).
 MAX_FRAMES = 1000000
@@ -99,6 +100,15 @@ class WorldInfo(_Strict):
     seed: int = Field(0, ge=0, le=2**32 - 1, description="Seed of every random choice; same seed, same frames.", examples=[42])
     mods: list[ModName] | None = Field(
         None, description="Mods to load (with what they require, and 'base'); all that are found if left out."
+    )
+    mod_folders: list[Annotated[str, Field(min_length=1)]] = Field(
+        default_factory=list,
+        max_length=16,
+        description="More folders of mods, besides a 'mods' folder beside the world file, './mods' and '--mods': "
+        "each relative to the world file's folder and inside it (no absolute path, no '..' out, no symlink out), "
+        "so a world file reads mods only from the folder the user named it in. "
+        "'sandmod play' writes it when a session it saves needs mods from elsewhere.",
+        examples=[["my-mods"]],
     )
     gravity: float = Field(
         1.0,

@@ -10,6 +10,7 @@ This module knows nothing of windows: :mod:`sandmod.jobs.play` drives it.
 
 from __future__ import annotations
 
+import os
 import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -18,12 +19,13 @@ from typing import Any, Iterable
 import numpy as np
 import tomli_w
 
-from ..errors import Problem, ProblemsError
+from ..errors import ProblemsError
+from ..formats.recording import atomic_path
 from ..formats.tomlsource import TomlSource
 from ..formats.userfiles import MAX_TEXT_BYTES
 from ..formats.validation import validate
 from ..formats.worldspec import MAX_TIMELINE, Event, WorldFile
-from ..world.loading import LoadedWorld, load_world_spec, mod_folders, read_world_spec, world_rules
+from ..world.loading import LoadedWorld, load_world_spec, read_world_spec, world_mod_folders, world_rules
 from ..world.scene import add_event, build_world
 from ..world.world import World
 from .undo import History
@@ -34,16 +36,13 @@ DEFAULT_SIZE = (320, 200)
 #: Events the record holds: a world file's timeline can hold no more.
 MAX_EVENTS = MAX_TIMELINE
 #: The record's size in a world file, beside the starting file (what a world file may hold, less a margin).
+#: It binds before MAX_EVENTS: a stroke's move takes about 185 bytes, so about 21,000 moves fill it.
 MAX_RECORD_BYTES = MAX_TEXT_BYTES - 256 * 2**10
 
 
 def _size(event: dict[str, Any]) -> int:
     """An event's bytes in a world file."""
     return len(tomli_w.dumps({"timeline": [event]}))
-
-
-class SessionFull(ProblemsError):
-    """The record holds what a world file can: a new event would make the session unreplayable."""
 
 
 @dataclass
@@ -61,6 +60,8 @@ class Session:
     changes: int = 0  # what the player did to the record: events added, undone, dropped
     saved_changes: int = 0  # ... when it was last saved
     record_bytes: int = 0  # the events' size in a world file
+    saved_events: list[dict[str, Any]] = field(default_factory=list)  # the record when it was last saved
+    full_at: int | None = None  # the frame from which what the player does is not recorded (the record is full)
 
     @classmethod
     def open(cls, path: Path | None = None, *, size: tuple[int, int] | None = None, mod_dirs: Iterable[Path] = ()) -> "Session":
@@ -93,25 +94,57 @@ class Session:
         """Has the player done anything since the session was last saved (or opened)?"""
         return self.changes != self.saved_changes
 
+    def unsaved_events(self) -> tuple[int, int]:
+        """(recorded since the last save, saved but undone or dropped since): what a save would change."""
+        same = 0
+        for now, saved in zip(self.events, self.saved_events):
+            if now != saved:
+                break
+            same += 1
+        return len(self.events) - same, len(self.saved_events) - same
+
+    @property
+    def caveats(self) -> list[str]:
+        """Why the world file :meth:`save` writes would not replay the session bit for bit (none: it would)."""
+        full = [f"the session was full at frame {self.full_at}: it replays up to there"] if self.full_at is not None else []
+        return [*self.not_replayed, *full]
+
     # --- what the player does ---------------------------------------------------------------
 
-    def add(self, action: str, table: dict[str, Any]) -> None:
+    def add(self, action: str, table: dict[str, Any]) -> bool:
         """Do ``action`` ("paint", "erase", "heat", "spawn", "launch" or "explode": a timeline action,
         ``table`` as a world file writes it) before the next step. A stroke that goes on from the last
-        event's end on the same frame joins it. ProblemsError if it is not an action;
-        :class:`SessionFull` if a world file could hold no more."""
+        event's end on the same frame joins it. ProblemsError if it is not an action. Returns whether
+        it was recorded: once the record holds what a world file can, the world still changes but
+        nothing more is recorded (:attr:`full_at`)."""
         event = {"frame": self.world.frame, action: table}
-        joined = self._joined(event)
-        events, size = len(self.events), self.record_bytes + _size(joined or event)
-        if joined is not None:
+        if self.full_at is None:
+            joined = self._joined(event)
+            if self._fits(joined or event, joined is not None):
+                if joined is not None:
+                    self._forget_last()
+                self._record(joined or event)
+                return True
+        self._apply(event)
+        self._added = None
+        self.full_at = self.world.frame if self.full_at is None else self.full_at
+        return False
+
+    def _fits(self, event: dict[str, Any], joins: bool) -> bool:
+        """Would the record, with ``event`` (in place of the last event, if it ``joins`` it), fit a world file?"""
+        events, size = len(self.events) + 1, self.record_bytes + _size(event)
+        if joins:
             events, size = events - 1, size - _size(self.events[-1])
-        if events >= MAX_EVENTS or size > MAX_RECORD_BYTES:
-            raise SessionFull([Problem("play", None, "", "the session holds what a world file can: s saves it; what you do now is not recorded")])
-        if joined is not None:
-            self._forget_last()
-        self._record(joined or event)
+        return events <= MAX_EVENTS and size <= MAX_RECORD_BYTES
 
     def _record(self, event: dict[str, Any]) -> None:
+        self._added = self._apply(event)
+        self.events.append(event)
+        self.record_bytes += _size(event)
+        self.changes += 1
+
+    def _apply(self, event: dict[str, Any]) -> list[list]:
+        """Set ``event`` up in the world (after the recorded ones in the timeline); the world's lists it added to."""
         spec = self.loaded.spec
         spec.timeline.append(validate(Event, TomlSource("play", "", event, folder=self.loaded.source.folder)))
         lists = self._world_lists()
@@ -121,10 +154,7 @@ class Session:
         except ProblemsError:
             spec.timeline.pop()
             raise
-        self._added = [items for items, length in zip(lists, before) if len(items) > length]
-        self.events.append(event)
-        self.record_bytes += _size(event)
-        self.changes += 1
+        return [items for items, length in zip(lists, before) if len(items) > length]
 
     def _world_lists(self) -> list[list]:
         world = self.world
@@ -192,6 +222,8 @@ class Session:
         self.world.mark_changed()
         self._added = None
         self.record_bytes = sum(_size(e) for e in self.events)
+        if self.full_at is not None and frame <= self.full_at:  # back before anything went unrecorded
+            self.full_at = None
 
     def load_snapshot(self, path: Path) -> list[str]:
         """Load a snapshot into the world: its cells and its frame. Events at its frame or later are
@@ -212,8 +244,12 @@ class Session:
     # --- mods -------------------------------------------------------------------------------
 
     def _mod_files(self) -> dict[Path, tuple[int, int]]:
-        files = {}
-        for folder in mod_folders(self.mod_dirs, self.loaded.path):
+        files: dict[Path, tuple[int, int]] = {}
+        try:
+            folders = world_mod_folders(self.loaded.spec, self.loaded.source, self.loaded.path, self.mod_dirs)
+        except ProblemsError:  # a folder the world names is gone: a reload says so
+            return files
+        for folder in folders:
             for path in sorted(Path(folder).glob("*.toml")):
                 try:
                     stat = path.stat()
@@ -267,21 +303,90 @@ class Session:
 
     # --- the record ---------------------------------------------------------------------------
 
-    def world_file(self) -> str:
+    def world_file(self, folders: list[str] | None = None, pictures: dict[str, str] | None = None) -> str:
         """The session as a world file: the starting world, with every event of the session in its
-        timeline. ``sandmod render`` of it makes the session's frames, bit for bit."""
+        timeline, loading mods from ``folders`` too and its pictures from where ``pictures`` says
+        (relative to where it is written; None: as the starting world does). ``sandmod render`` of it
+        makes the session's frames, bit for bit, up to the frame the record was full at, if it was."""
         data = dict(self.data)
-        data["timeline"] = [*self.data.get("timeline", []), *self.events]
+        if folders is not None:
+            world = {k: v for k, v in data["world"].items() if k != "mod_folders"}
+            data["world"] = {**world, "mod_folders": folders} if folders else world
+        pictures = pictures or {}
+
+        def moved(table: dict[str, Any]) -> dict[str, Any]:
+            return {**table, "file": pictures[table["file"]]} if _picture(table) in pictures else table
+
+        if "scene" in data:
+            data["scene"] = [moved(shape) for shape in data["scene"]]
+        timeline = [{**e, "paint": moved(e["paint"])} if "paint" in e else e for e in self.data.get("timeline", [])]
+        data["timeline"] = [*timeline, *self.events]
         render = dict(data.get("render", {}))
-        render["frames"] = max(self.world.frame, 1)
+        render["frames"] = max(self.world.frame if self.full_at is None else self.full_at, 1)
         data["render"] = render
         return tomli_w.dumps(data)
 
     def save(self, path: Path) -> None:
-        """Write :meth:`world_file` to ``path``, whole or not at all (WriteError if it cannot be).
-        :attr:`not_replayed` says why it would not replay the session bit for bit, if it would not."""
-        from ..formats.recording import atomic_path
-
-        with atomic_path(Path(path)) as temporary:
-            temporary.write_text(self.world_file(), encoding="utf-8")
+        """Write :meth:`world_file` to ``path``, whole or not at all (WriteError if it cannot be), so
+        that it renders there: the player's mods and the world's pictures that render would not find
+        from there are copied beside it, into ``NAME-mods`` and ``NAME-pictures``. :attr:`caveats` says
+        why it would not replay the session bit for bit."""
+        path = Path(path)
+        folders, pictures = self._bring_mods(path), self._bring_pictures(path)
+        with atomic_path(path) as temporary:
+            temporary.write_text(self.world_file(folders, pictures), encoding="utf-8")
         self.saved_changes = self.changes
+        self.saved_events = list(self.events)
+
+    def _bring_mods(self, path: Path) -> list[str]:
+        """The ``mod_folders`` a world file at ``path`` needs to load the player's mods (those no plugin
+        brings): each mod's folder if it lies under ``path``'s folder, else a copy of its file, as it
+        was loaded, in ``NAME-mods`` beside it (written here)."""
+        home = path.parent.resolve()
+        named: list[str] = []
+        copies: dict[str, bytes] = {}
+        for mod in self.world.ruleset.mods:
+            file = mod.source.path
+            if mod.plugin != "user" or file is None or file.parent == (home / "mods").resolve():
+                continue
+            if home in file.parent.parents:
+                named.append(file.parent.relative_to(home).as_posix())
+                continue
+            name = file.name if file.name not in copies else f"{mod.name}-{file.name}"  # the same name: a copy render takes for the same mod
+            copies[name] = mod.source.text.encode("utf-8") if file.suffix == ".toml" else file.read_bytes()
+        if copies:
+            named.append(_carry(copies, path.parent / f"{path.stem}-mods").name)
+        return list(dict.fromkeys(named))
+
+    def _bring_pictures(self, path: Path) -> dict[str, str]:
+        """Where a world file at ``path`` finds each picture the starting world paints (by the name it
+        gives): under ``path``'s folder, or a copy in ``NAME-pictures`` beside it (written here)."""
+        folder = self.loaded.source.folder
+        home = path.parent.resolve()
+        if folder is None or folder.resolve() == home:
+            return {}
+        tables = [*self.data.get("scene", []), *(e.get("paint", {}) for e in self.data.get("timeline", []))]
+        found, copies = {}, {}
+        for written in dict.fromkeys(filter(None, map(_picture, tables))):
+            real = (folder / written).resolve()
+            if home in real.parents:
+                found[written] = real.relative_to(home).as_posix()
+            else:
+                copies[os.path.normpath(written)] = real.read_bytes()
+                found[written] = f"{path.stem}-pictures/{Path(os.path.normpath(written)).as_posix()}"
+        if copies:
+            _carry(copies, path.parent / f"{path.stem}-pictures")
+        return found
+
+
+def _picture(table: Any) -> str | None:
+    """The file a world file's shape paints, if it is a picture."""
+    return table.get("file") if isinstance(table, dict) and table.get("shape") == "image" else None
+
+
+def _carry(files: dict[str, bytes], folder: Path) -> Path:
+    """``files`` (relative name: contents) written into ``folder``, each whole or not at all."""
+    for name, contents in files.items():
+        with atomic_path(folder / name) as temporary:
+            temporary.write_bytes(contents)
+    return folder

@@ -83,6 +83,30 @@ def mod_folders(extra: Iterable[Path] = (), world: Path | None = None) -> list[P
     return list(unique.values())
 
 
+def world_mod_folders(spec: WorldFile, source: TomlSource, path: Path, mod_dirs: Iterable[Path] = ()) -> list[Path]:
+    """:func:`mod_folders` for a world file, with the folders its ``world.mod_folders`` names (each inside
+    the world file's folder: a world file never makes sandmod read mods from elsewhere). ProblemsError
+    names a folder refused or missing."""
+    from ..errors import ProblemsError, display_path
+    from ..formats.userfiles import Refused, inside
+
+    folder = source.folder or Path(path).parent
+    named, problems = [], []
+    for number, written in enumerate(spec.world.mod_folders):
+        where = ("world", "mod_folders", number)
+        try:
+            found = inside(folder, written, "mods folder")
+        except Refused as refused:
+            problems.append(source.problem(where, str(refused)))
+            continue
+        if not found.is_dir():
+            problems.append(source.problem(where, f"no folder '{written}' in {display_path(folder)}"))
+        named.append(found)
+    if problems:
+        raise ProblemsError(problems)
+    return mod_folders([*mod_dirs, *named], path)
+
+
 def read_world_spec(path: str | Path) -> tuple[WorldFile, TomlSource]:
     """Read and validate a world file (no mods needed)."""
     from ..errors import ProblemsError
@@ -156,7 +180,7 @@ def world_rules(
     """Find the mods as the command line does and compile those the world asks for (``change``
     may alter them first: a sweep's parameters). ProblemsError names what is wrong."""
     registry = registry or load_registry()
-    modset: ModSet = find_mods(registry, mod_folders(mod_dirs, path))
+    modset: ModSet = find_mods(registry, world_mod_folders(spec, source, path, mod_dirs))
     selected = _select_for_world(modset, spec, source)
     return WorldRules(registry, modset, compile_mods(change(selected) if change else selected))
 

@@ -65,14 +65,23 @@ def bar_order(ruleset: Ruleset) -> list[int]:
     return [e.index for e in sorted(chosen, key=lambda e: (rank.get(e.spec.archetype, len(rank)), e.name, e.id))]
 
 
-def default_element(ruleset: Ruleset, offered: list[int]) -> int:
-    """What a first stroke paints: sand, or the first powder, or the first element offered."""
+def default_element(ruleset: Ruleset, offered: list[int], named: list[str] | None = None) -> int:
+    """What a first stroke paints: sand; else the first powder, else the first liquid, of the mods the
+    world names (``named``, in its order; None: every mod loaded), in the bar's order; else the first
+    powder or liquid offered; else the first element offered."""
     try:
         return ruleset.index("sand:sand")
     except KeyError:
         pass
-    powders = [e for e in offered if ruleset.elements[e].spec.archetype == "powder"]
-    return (powders or offered or [0])[0]
+    order = {name: number for number, name in enumerate(named or [])}
+    mods = [e for e in offered if named is None or ruleset.elements[e].mod in order]
+    mods.sort(key=lambda e: order.get(ruleset.elements[e].mod, 0))  # stable: the bar's order within a mod
+    for candidates in (mods, offered):
+        for archetype in ("powder", "liquid"):
+            found = [e for e in candidates if ruleset.elements[e].spec.archetype == archetype]
+            if found:
+                return found[0]
+    return (offered or [0])[0]
 
 
 def search(ruleset: Ruleset, offered: list[int], text: str) -> list[int]:

@@ -8,6 +8,7 @@ undo, a reload or a snapshot load), a new palette or another view mode redraws e
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,16 +23,39 @@ GAP = 6  # between the bar's groups
 MIN_WIDTH = 640  # room for the element bar and the status line
 MIN_HEIGHT = 280  # room for the help
 MAX_AREA = (1280, 800)  # the most of the screen the world takes; a larger one is seen through a viewport
+LINE = 16  # a line of text's height, in pixels
+MARGIN = 6  # between text and the window's edges
 TEXT, DIM, RED = (225, 225, 225), (150, 150, 160), (255, 120, 100)
+PANEL, PROBLEM_BACK = (24, 24, 28), (20, 10, 10)
+
+
+def wrap(font, text: str, width: int) -> list[str]:
+    """``text`` cut into lines that each fit ``width`` pixels in ``font``: at spaces where it can,
+    inside a word too long for a line. ``"".join`` of the lines gives ``text`` back."""
+    fits = lambda line: font.size(line.rstrip())[0] <= width  # noqa: E731
+    lines, line = [], ""
+    for token in re.findall(r"\S+\s*|\s+", text):
+        if fits(line + token):
+            line += token
+            continue
+        if line:
+            lines.append(line)
+        while not fits(token):
+            cut = next((n for n in range(len(token) - 1, 0, -1) if fits(token[:n])), 1)
+            lines.append(token[:cut])
+            token = token[cut:]
+        line = token
+    return [*lines, line] if line or not lines else lines
 
 
 @dataclass
 class Overlay:
     """What the window shows over the world, besides the cells: filled in by the window every frame."""
 
-    status: str = ""
+    status: str = ""  # the frame, the speed, the brush, what is under the cursor
+    message: str = ""  # what the window says (what was saved, why not...), after the status
     problems: list[str] = field(default_factory=list)
-    prompt: str = ""  # a question the next key answers
+    prompt: str = ""  # a question the next key answers, in place of the message
     help: bool = False
     bar: list[int] = field(default_factory=list)  # the elements offered, in order
     chosen: int = 0
@@ -51,6 +75,7 @@ class View:
         self.corner = [0, 0]  # the world's cell at the viewport's top-left
         self.heat_view = False
         self.world: World | None = None
+        self.said: list[tuple[str, object]] = []  # the message's lines as last drawn, with their rectangles
         self.attach(world)
 
     # --- what is stale ----------------------------------------------------------------------
@@ -156,7 +181,7 @@ class View:
             self._outline(mouse, *overlay.brush)
         self._problems(overlay.problems)
         self._bar(overlay)
-        self._status(overlay.prompt or overlay.status, RED if overlay.prompt else TEXT)
+        self._status(overlay)
         self._tooltip(overlay, mouse)
         if overlay.help:
             self._help()
@@ -184,23 +209,27 @@ class View:
         else:
             self.pg.draw.circle(self.screen, TEXT, (x, y), reach, 1)
 
-    def _text(self, text: str, at: tuple[int, int], colour=TEXT, back=None) -> int:
+    def _text(self, text: str, at: tuple[int, int], colour=TEXT, back=None):
+        """``text`` drawn with its top-left at ``at``; the rectangle it took."""
         image = self.font.render(text, True, colour)
         if back is not None:
             self.pg.draw.rect(self.screen, back, (at[0] - 3, at[1] - 2, image.get_width() + 6, image.get_height() + 4))
-        self.screen.blit(image, at)
-        return image.get_width()
+        return self.screen.blit(image, at)
+
+    def _lines(self, text: str) -> list[str]:
+        return wrap(self.font, text, self.size[0] - 2 * MARGIN)
 
     def _problems(self, problems: list[str]) -> None:
-        lines = problems[:6] + ([f"... and {len(problems) - 6} more"] if len(problems) > 6 else [])
-        if lines:
-            lines.append("the old rules go on; save the mod again when it is fixed")
-        for number, line in enumerate(lines):
-            self._text(line[: self.size[0] // 6], (6, 6 + number * 16), RED, back=(20, 10, 10))
+        shown = problems[:6] + ([f"... and {len(problems) - 6} more"] if len(problems) > 6 else [])
+        if shown:
+            shown.append("the old rules go on; save the mod again when it is fixed")
+        lines = [line for problem in shown for line in self._lines(problem)]
+        for number, line in enumerate(lines[: (self.area[1] - MARGIN) // LINE]):
+            self._text(line, (MARGIN, MARGIN + number * LINE), RED, back=PROBLEM_BACK)
 
     def _bar(self, overlay: Overlay) -> None:
         pygame, top = self.pg, self.area[1]
-        pygame.draw.rect(self.screen, (24, 24, 28), (0, top, self.size[0], BAR + STATUS))
+        pygame.draw.rect(self.screen, PANEL, (0, top, self.size[0], BAR + STATUS))
         looks = self.world.ruleset.looks
         for left, width, element in self.bar_slots(overlay.bar):
             colour = tuple(int(c) for c in self.palette[looks.normal[element, 0]])
@@ -208,8 +237,19 @@ class View:
             if element == overlay.chosen or element in overlay.matches:
                 pygame.draw.rect(self.screen, (255, 255, 255), (left, top + 1, width, BAR - 2), 2)
 
-    def _status(self, text: str, colour) -> None:
-        self._text(text[: self.size[0] // 5], (4, self.area[1] + BAR + 3), colour)
+    def _status(self, overlay: Overlay) -> None:
+        """The status line; the message (or prompt) after it if it fits there, else wrapped in lines
+        over the bottom of the world, the whole of it readable."""
+        said, colour = (overlay.prompt, RED) if overlay.prompt else (overlay.message, TEXT)
+        row = self.area[1] + BAR + 3
+        status = self._text(overlay.status, (MARGIN, row))
+        gap = self.font.size("   ")[0] if overlay.status else 0
+        if status.right + gap + self.font.size(said)[0] <= self.size[0] - MARGIN:
+            self.said = [(said, self._text(said, (status.right + gap, row), colour))] if said else []
+            return
+        lines = self._lines(said)
+        top = max(self.area[1] - len(lines) * LINE - 2, 0)
+        self.said = [(line, self._text(line, (MARGIN, top + number * LINE), colour, back=PANEL)) for number, line in enumerate(lines)]
 
     def _tooltip(self, overlay: Overlay, mouse) -> None:
         element = self.bar_element_at(mouse, overlay.bar)

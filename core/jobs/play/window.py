@@ -9,6 +9,7 @@ writes replays the session bit for bit.
 from __future__ import annotations
 
 import os
+import tempfile
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import ProblemsError
+from ...errors import ProblemsError, display_path
 from ...formats.worldspec import MAX_FRAMES
 from ..session import Session
 from . import keys, tools
@@ -58,7 +59,7 @@ class Play:
         self.save_on_exit = save_on_exit  # write the session's world file when the window closes
         self.view = View(pygame, session.world, scale)
         self.bar = tools.bar_order(session.world.ruleset)
-        self.brush = tools.Brush(tools.default_element(session.world.ruleset, self.bar))
+        self.brush = tools.Brush(self._default_element())
         self.paused, self.speed, self.help, self.running = False, 1.0, False, True
         self.message, self.message_at, self.prompt = "", 0.0, ""
         self.problems: list[str] = []
@@ -70,6 +71,8 @@ class Play:
         self.captured: deque = deque(maxlen=CAPTURE_SECONDS * DISPLAY_FPS // 2)
         self.capture_job: Capture | None = None
         self.saved_to: Path | None = None
+        self.saved_message = ""  # what the last save said (the command line prints it when the window closes)
+        self.not_saved = ""  # why the session closed without being saved where asked (and where it went instead)
         self.due = 0.0
         self.next_mod_check = 0.0
         self.clock = pygame.time.Clock()
@@ -84,7 +87,7 @@ class Play:
             self._one_frame(self.clock.tick(DISPLAY_FPS if self.fixed_steps is None else 0) / 1000)
             shown += 1
         if self.save_on_exit:
-            self.do_save()
+            self.save_before_closing()
         if self.capture_job is not None:
             self.capture_job.result(wait=True)
         self.pg.quit()
@@ -128,7 +131,7 @@ class Play:
         began = time.perf_counter()
         matches = set(self._matches()) if self.search else set()
         brush = (self.brush.size, self.brush.square) if not self.help else None
-        overlay = Overlay(self._status(), self.problems, self.prompt, self.help, self.bar, self.brush.element, matches, brush)
+        overlay = Overlay(self._status(), self._message(), self.problems, self.prompt, self.help, self.bar, self.brush.element, matches, brush)
         view.draw(overlay, self.pg.mouse.get_pos())
         self.phases.blit += time.perf_counter() - began
 
@@ -156,8 +159,11 @@ class Play:
         try:
             self.brush.element = ruleset.index(chosen)
         except KeyError:
-            self.brush.element = tools.default_element(ruleset, self.bar)
+            self.brush.element = self._default_element()
         self.say("mods reloaded")
+
+    def _default_element(self) -> int:
+        return tools.default_element(self.session.world.ruleset, self.bar, self.session.loaded.spec.world.mods)
 
     # --- input ----------------------------------------------------------------------------------
 
@@ -233,9 +239,12 @@ class Play:
 
     def _add(self, event: tools.Event) -> None:
         try:
-            self.session.add(*event)
+            recorded = self.session.add(*event)
         except ProblemsError as error:
             self.say(error.problems[0].message)
+            return
+        if not recorded:
+            self.say(f"session full: painting goes on, but strokes from frame {self.session.full_at} on are not saved (s saves the rest)")
 
     def _cursor(self) -> tuple[int, int] | None:
         return self.view.cell_at(self.pg.mouse.get_pos())
@@ -350,16 +359,36 @@ class Play:
         if self.help:
             self.help = False
         elif self.session.unsaved and not self.save_on_exit:
-            count = len(self.session.events)
-            self.prompt = f"{count} action{'s' * (count != 1)} not saved: s saves and quits, escape quits without saving, any other key stays"
+            self.prompt = f"{self._unsaved()} not saved: s saves and quits, escape quits without saving, any other key stays"
         else:
             self.running = False
+
+    def _unsaved(self) -> str:
+        """What a save would add to the session's file, in words: "3 actions", "1 undone action"..."""
+        added, dropped = self.session.unsaved_events()
+        words = [f"{added} action{'s' * (added != 1)}"] if added else []
+        words += [f"{dropped} undone action{'s' * (dropped != 1)}"] if dropped else []
+        return " and ".join(words) or "a change"
 
     def _close(self) -> None:
         """The window's close button: what is not saved is saved first."""
         if self.session.unsaved and not self.save_on_exit:
-            self.do_save()
+            self.save_before_closing()
         self.running = False
+
+    def save_before_closing(self) -> None:
+        """Save the session; if no folder takes it, into a new temporary folder, :attr:`not_saved` saying so."""
+        self.do_save()
+        if self.saved_to is not None:
+            return
+        where = self._places()
+        try:
+            path = Path(tempfile.mkdtemp(prefix="sandmod-play-")) / self.session_name
+            self.session.save(path)
+        except OSError as error:
+            self.not_saved = f"the session was not saved: not in {where}, nor in a temporary folder ({error.strerror or error})"
+            return
+        self.not_saved = f"the session was not saved in {where}; it was written to {path} instead"
 
     # --- files ----------------------------------------------------------------------------------
 
@@ -369,11 +398,15 @@ class Play:
             self.saved_to = write_somewhere(self.session_name, self.places, self.session.save)
         except OSError as error:
             self.saved_to = None
-            self.say(f"could not save {self.session_name} here, in the current folder or the home folder: {error.strerror or error}")
+            self.say(f"could not save {self.session_name} in {self._places()}: {error.strerror or error}")
             return
-        caveat = self.session.not_replayed
+        caveat = self.session.caveats
         replays = f"does not replay bit for bit ({'; '.join(caveat)})" if caveat else "replays it"
-        self.say(f"saved {self.saved_to}: sandmod render {self.saved_to.name} {replays}")
+        self.saved_message = f"saved {self.saved_to}: sandmod render {display_path(self.saved_to)} {replays}"
+        self.say(self.saved_message)
+
+    def _places(self) -> str:
+        return ", ".join(str(place.absolute()) for place in self.places)
 
     def do_save_snapshot(self, key: str = "") -> None:
         try:
@@ -433,13 +466,15 @@ class Play:
             under = world.ruleset.elements[int(world.cells[y, x])]
             celsius = world.temperature_at(x, y)
             parts.append(f"{under.id} {celsius:.0f} °C at {x},{y}")
-        if self.search is not None:
-            parts.append(f"find: {self.search}_  (enter takes it)")
-        elif self.message and time.monotonic() - self.message_at < MESSAGE_SECONDS:
-            parts.append(self.message)
-        else:
-            parts.append("F1: every key")
         return "   ".join(part for part in parts if part)
+
+    def _message(self) -> str:
+        """What the status line says after the status: the search, the last message (for a while), or the help key."""
+        if self.search is not None:
+            return f"find: {self.search}_  (enter takes it)"
+        if self.message and time.monotonic() - self.message_at < MESSAGE_SECONDS:
+            return self.message
+        return "F1: every key"
 
 
 def benchmark(session: Session, scale: int, frames: int, busy: bool) -> dict:
