@@ -23,12 +23,12 @@ from test_chunks import digest
 #: to follow it in its run and a gas to waver by its plume block's roll (no comb), and lava to set
 #: into falling basalt instead of static stone.
 GOLDEN = {
-    ("mix", 96): "0d54785dd69e3ed8565bdf93146a33013116c3d8b55fca31bcb972ad7cb12783",
-    ("halves", 96): "9b84613b83c7151113b97fb91b271dd862efd902a783cfccdd45156f9e903a08",
-    ("everything", 96): "ca89836f9a40eb52d99cb0c52c31a4424b353c03dc93ef9c180580736b66e74c",
-    ("mix", 272): "671a872c790651533e809632ed0eb002bfa46e916a684e1af521f1e804bf9955",
-    ("halves", 272): "64916ab6b869ea20b80edbbc6324e14007f921db1d0b29e0fba652652647fb61",
-    ("everything", 272): "af03d4063c5b74ba98727d90fd938f6d176bcf5ecee8ccc54a814050e777b55e",
+    ("mix", 96): "31f6bda3b240a5e010e9396b8e04fb888704e5f31978a8b5d3cee7ac10a56d2c",
+    ("halves", 96): "c12805703f3c9c9224011547637fc4687e2e6f0db972b300191a26d2916d3661",
+    ("everything", 96): "eb149aad0577151c19410e9e9922d54b0fd77171d18468d7911649962c87db70",
+    ("mix", 272): "2a510e4736c0bb3d1203084b9f9e45f7e13e5c78b7442bcfcbfabbbc30687fc7",
+    ("halves", 272): "e9af47355540a57fc7d5ab8e82b0cdcdb8dd6c89a8f002692a2051aefc30704a",
+    ("everything", 272): "cb36ab7219256aa64ef956ab09cd071e3902324db12a2a9469519794eac53823",
 }
 
 

@@ -43,7 +43,7 @@ from .fire import heat_and_fire
 from .heat import conduct
 from .jit import compiled, in_place, inlined, numba, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
-from .moves import fluid_near, knock, move, sink_run, slump_side
+from .moves import fluid_near, knock, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
 from .prefetch import prefetch
 from .reactions import lifetime, react
@@ -105,12 +105,13 @@ def _boxed_in(cells, displace, e, x, y, ty):
 
 
 @inlined
-def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key, ambient, y1, busy_box, stir_box):
+def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key, ambient, x0, y0, x1, y1, frame, busy_box, stir_box):
     """The fast loop: the cells of row y's segment sx0..sx1-1 from its ``n``-th on (in the row's
     direction) that need little, in a loop that holds few values (registers, not the stack): cells
     at rest that nothing around them can move (a resting fluid that nothing it could displace is
     next to, a resting grain, a static cell), a loose grain shut in where it is (it comes to rest,
-    see :func:`_boxed_in`), and a straight sink into a fluid by a grain at rest, with the run
+    see :func:`_boxed_in`), a resting grain's slump into a fluid diagonally below it
+    (:func:`~.moves.slump`), and a straight sink into a fluid by a grain at rest, with the run
     behind it (:func:`~.moves.sink_run`). Stops at the first cell that needs more. Returns how far
     it got (the segment's length when done), that cell and its element, whether only its move is
     left to decide (``ready``), and the boxes of the cells it changed and stirred."""
@@ -156,8 +157,13 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key,
             opens = _enterable(t.displace[e, below], below, flags[_at(ty, x)])
         if not opens:
             if (f & LOOSE) == 0 and not sliding:
-                if slump_side(cells, t.displace, e, x, y, ty, 1) != 0:
-                    break  # at rest beside a fluid diagonally below: it slumps into it
+                side = slump_side(cells, t.displace, e, x, y, ty, 1 if forward else -1)
+                if side != 0:  # at rest beside a fluid diagonally below: it slumps into it, as the full update would
+                    busy, stir, moved = slump(s, t, e, x, y, ty, side, exchange_key, knock_key, forward, x0, y0, x1, y1, frame, ambient)
+                    if busy:
+                        busy_box = _box_with(busy_box, min(x, x + side * moved), max(x, x + side * moved), y, ty if moved else y)
+                    if stir:
+                        stir_box = _box_with(stir_box, min(x, x + side), max(x, x + side), y, ty)
                 n += 1  # at rest on the ground: stays put
                 continue
             if not _boxed_in(cells, t.displace, e, x, y, ty):
@@ -284,7 +290,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             n = 0
             while n < count:
                 if fast:
-                    n, x, e, ready, busy_box, stir_box = _fast_cells(s, t, y, sx0, sx1, n, forward, present, keys[4], keys[5], ambient, y1, busy_box, stir_box)
+                    n, x, e, ready, busy_box, stir_box = _fast_cells(s, t, y, sx0, sx1, n, forward, present, keys[4], keys[5], ambient, x0, y0, x1, y1, frame, busy_box, stir_box)
                     if n == count:
                         break
                     handed_on += 1

@@ -158,6 +158,28 @@ def slump_side(cells, displace, e, x, y, ty, first):
     return 0
 
 
+@inlined
+def slump(s, t, e, x, y, ty, side, exchange_key, knock_key, forward, x0, y0, x1, y1, frame, ambient):
+    """The grain of element e resting at (x, y) slumps into the fluid diagonally below it on
+    ``side`` (see :func:`slump_side`), by its chance to trade places with it (as a move's first
+    cell: :func:`_way_into`), and arrives at rest; the grains diagonally above the cell it left
+    may be knocked loose. Returns (busy, stir, moved): whether anything changed or may, whether
+    the heat field changed, and whether it went."""
+    qx = x + side
+    o = s.cells[_at(ty, qx)]
+    way = _way_into_cell(s, t, POWDER, t.displace[e, o], qx, ty, False, False, exchange_key, x, y, forward, x0, y0, x1, y1, frame)
+    if way != OPEN:
+        return way == WAIT, False, False
+    marks = s.flags[_at(y, x)] & (CARRIED & ~LOOSE)
+    stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(ty, qx)]), t.heat_cap[o], t.cooling[o], ambient)
+    swap(s, x, y, qx, ty, False)
+    s.vx[_at(ty, qx)] = 0
+    s.vy[_at(ty, qx)] = 0
+    s.flags[_at(ty, qx)] = MOVED | marks
+    knock(s, t, x, y, qx, ty, knock_key, 2, 4)
+    return True, stir, True
+
+
 @compiled
 def particle_moves(h, accel, keep, max_speed, cvx, cvy):
     """A particle in flight: gravity, drag (``keep`` of 256 kept), its speed clamped; the move is
@@ -524,13 +546,13 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
     elif kind == GAS and _within(ty, height) and vy[_at(ty, x)] != 0 and t.fall_dir[cells[_at(ty, x)]] == g and t.archetype[cells[_at(ty, x)]] == GAS and (flags[_at(ty, x)] & DONE) == 0:
         return True, False, np.int64(0), x, y, y  # the gas ahead rises (sinks) and has yet to move: wait to follow it (follow_run)
     elif kind == POWDER:
-        if loose == 0:
-            d0x = slump_side(cells, t.displace, e, x, y, ty, 1 if h & 2 else -1)
-            if d0x == 0:
-                return busy, False, np.int64(0), x, y, y  # resting: stays put until the cell below opens or it is knocked
-            tries, d0y, cvx = 1, g, 0  # resting beside a fluid diagonally below: it slumps into it
-        else:
-            tries, d0x, d0y, d1x, d2x, d2y, cvx, coasting = powder_moves(h, g, t.impact_share[e], t.max_speed[e], cvx, cvy)
+        if loose == 0:  # resting: stays put until the cell below opens or it is knocked, or slumps into a fluid
+            side = slump_side(cells, t.displace, e, x, y, ty, 1 if forward else -1)
+            if side == 0:
+                return busy, False, np.int64(0), x, y, y
+            b, stir, moved = slump(s, t, e, x, y, ty, side, exchange_key, knock_key, forward, x0, y0, x1, y1, frame, ambient)
+            return busy or b, stir, np.int64(0), x + side * moved, ty if moved else y, y
+        tries, d0x, d0y, d1x, d2x, d2y, cvx, coasting = powder_moves(h, g, t.impact_share[e], t.max_speed[e], cvx, cvy)
         cvy = 0
     else:
         cvx = cvy = 0
