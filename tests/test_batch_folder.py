@@ -9,11 +9,11 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
+from conftest import wait_for
 from sandmod.jobs import batch as batching
 from test_batch import SWEEP, WORLD, invoke, same_files, table
 
@@ -79,9 +79,7 @@ def test_an_interrupted_batch_writes_the_table_of_its_runs_done_and_resumes(swee
     child = subprocess.Popen([sys.executable, "-m", "sandmod", "batch", str(sweep), "-o", "out", "-j", "2"],
                              stderr=subprocess.PIPE, text=True, start_new_session=True)
     runs = Path("out/runs")
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not (runs.is_dir() and any(p.name[0] != "." for p in runs.iterdir())):
-        time.sleep(0.02)
+    wait_for(lambda: runs.is_dir() and any(p.name[0] != "." for p in runs.iterdir()), child)
     os.killpg(child.pid, signum)  # as a terminal's Ctrl-C or a scheduler's SIGTERM reach the whole group
     _, err = child.communicate(timeout=60)
     assert child.returncode == status and "Traceback" not in err and "--resume" in err, err
