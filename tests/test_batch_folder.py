@@ -91,7 +91,7 @@ def test_an_interrupted_batch_writes_the_table_of_its_runs_done_and_resumes(swee
     assert result.exit_code == 0 and table(Path("whole/results.csv")) == table(Path("out/results.csv"))
 
 
-@pytest.mark.parametrize("address", ["nonsense", "tcp://127.0.0.1:1"])
+@pytest.mark.parametrize("address", ["nonsense", pytest.param("tcp://127.0.0.1:1", marks=pytest.mark.slow)])  # waits out dask's 10 s
 def test_a_scheduler_that_does_not_answer_is_one_line(sweep, address):
     pytest.importorskip("dask.distributed")
     result = invoke("batch", str(sweep), "-o", "out", "--executor", "dask", "--scheduler", address)
