@@ -22,7 +22,7 @@ import pluggy
 if TYPE_CHECKING:
     from .formats.recording import RecorderSpec
     from .formats.tomlsource import TomlSource
-    from .world.world import World
+    # World (sandmod.World, which Metric names) is in a part above this one: named, not imported.
 
 PROJECT = "sandmod"
 

@@ -66,13 +66,18 @@ def bar_order(ruleset: Ruleset) -> list[int]:
 
 
 def default_element(ruleset: Ruleset, offered: list[int], named: list[str] | None = None) -> int:
-    """What a first stroke paints: sand; else the first powder, else the first liquid, of the mods the
-    world names (``named``, in its order; None: every mod loaded), in the bar's order; else the first
-    powder or liquid offered; else the first element offered."""
+    """What a first stroke paints: sand; else the first of the mods the world names (``named``, in its
+    order; None: every mod loaded) whose namesake element (``lava:lava``) is a powder or liquid; else
+    the first powder, else the first liquid, of those mods, in the bar's order; else the first powder
+    or liquid offered; else the first element offered."""
     try:
         return ruleset.index("sand:sand")
     except KeyError:
         pass
+    for mod in named or []:
+        namesake = [e for e in offered if ruleset.elements[e].id == f"{mod}:{mod}"]
+        if namesake and ruleset.elements[namesake[0]].spec.archetype in ("powder", "liquid"):
+            return namesake[0]
     order = {name: number for number, name in enumerate(named or [])}
     mods = [e for e in offered if named is None or ruleset.elements[e].mod in order]
     mods.sort(key=lambda e: order.get(ruleset.elements[e].mod, 0))  # stable: the bar's order within a mod
