@@ -80,8 +80,8 @@ def run(world: World, frames: int) -> World:
 
 
 def wait_for(ready, child: subprocess.Popen, timeout: float = 600) -> None:
-    """Poll until ``ready()`` while ``child`` runs: however busy the machine, the test goes on once
-    the child has got there, and fails (not sends a signal too early) if it ends or hangs first."""
+    """Poll until ``ready()`` while ``child`` runs, so that a test signals the child once it has got
+    there, however busy the machine; fail if the child ends, or ``timeout`` passes, first."""
     deadline = time.monotonic() + timeout
     while not ready():
         assert child.poll() is None and time.monotonic() < deadline, f"never ready: exit {child.poll()}"
