@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
 import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -75,6 +77,15 @@ def run(world: World, frames: int) -> World:
     for _ in range(frames):
         world.step()
     return world
+
+
+def wait_for(ready, child: subprocess.Popen, timeout: float = 600) -> None:
+    """Poll until ``ready()`` while ``child`` runs, so that a test signals the child once it has got
+    there, however busy the machine; fail if the child ends, or ``timeout`` passes, first."""
+    deadline = time.monotonic() + timeout
+    while not ready():
+        assert child.poll() is None and time.monotonic() < deadline, f"never ready: exit {child.poll()}"
+        time.sleep(0.02)
 
 
 def invoke(*args: str):

@@ -7,12 +7,12 @@ import filecmp
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 
+from conftest import wait_for
 from sandmod.jobs import batch as batching
 from sandmod.tools.cli import cli
 
@@ -120,9 +120,7 @@ def test_a_batch_killed_half_way_and_resumed_ends_as_one_that_was_not(sweep):
     assert invoke("batch", str(sweep), "-o", "whole", "-j", "1").exit_code == 0
     child = subprocess.Popen([sys.executable, "-m", "sandmod", "batch", str(sweep), "-o", "killed", "-j", "1"], stderr=subprocess.PIPE, text=True)
     runs = Path("killed/runs")
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not (runs.is_dir() and any(p.name[0] != "." for p in runs.iterdir())):
-        time.sleep(0.05)
+    wait_for(lambda: runs.is_dir() and any(p.name[0] != "." for p in runs.iterdir()), child)
     child.send_signal(signal.SIGKILL)
     child.wait()
     done = [p for p in runs.iterdir() if not p.name.startswith(".")]

@@ -165,6 +165,7 @@ def test_every_image_in_the_docs_exists_and_says_how_it_was_made():
 FIGURE = re.compile(r"sandmod (?:render|palette)[^`\n]*-o (docs/images/[a-z_]+\.(?:webp|png))")
 
 
+@pytest.mark.slow  # renders every figure again
 def test_every_figure_of_a_world_is_what_its_command_makes_now(tmp_path):
     """The pages' figures drawn by sandmod (the example worlds' animations, the palette) are current:
     each command, run again into another folder, draws the same pixels, frame for frame."""

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import invoke
+from conftest import invoke, wait_for
 from sandmod.formats.limits import BASELINE_BYTES, WORLD_BYTES_PER_CELL
 
 SMALL = """
@@ -184,7 +184,7 @@ def test_coordinates_are_bounded(shape):
     world(SMALL + f"\n[[scene]]\n{shape}\n")
     started = time.perf_counter()
     refused(invoke("validate", "w.toml"), "must be")
-    assert time.perf_counter() - started < 10
+    assert time.perf_counter() - started < 60  # not drawn cell by cell (hours), on however busy a machine
 
 
 def test_a_world_larger_than_the_memory_limit_is_refused_before_it_is_made():
@@ -307,10 +307,8 @@ def test_sigterm_and_sighup_leave_nothing_behind(signum):
     world(SMALL.replace("width = 32", "width = 256").replace("height = 32", "height = 256"))
     args = ["render", "w.toml", "--frames", "100000", "--every", "1", "--scale", "1", "-o", "out.gif", "--still", "s.png"]
     process = subprocess.Popen([sys.executable, "-m", "sandmod", *args], stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + 120
-    while not list(Path(".").glob(".out.gif.*.part")) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    time.sleep(0.5)
+    wait_for(lambda: list(Path(".").glob(".s.png.*.part")), process)  # the last temporary, made before the frames
+    time.sleep(0.5)  # and on into the frames: the signal may land anywhere, this only makes the frames likelier
     process.send_signal(signum)
     assert process.wait(60) == 128 + signum
     assert everything() == {"w.toml"}, process.stderr.read()
