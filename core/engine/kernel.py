@@ -41,7 +41,7 @@ from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _ente
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
 from .heat import conduct
-from .jit import compiled, in_place, inlined, numba, parallel, prange
+from .jit import compiled, in_place, inlined, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
 from .moves import fluid_near, knock, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
@@ -223,7 +223,7 @@ def _update_cell(s, t, x, y, e, ready, present, keys, detonations, tile, forward
     return busy or b, stir or st, present | born, px, py, ry
 
 
-@in_place
+@inlined
 def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, fast):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
@@ -246,7 +246,8 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     not in the mask skips looking at its neighbours for them (in a world of
     sand and water, every cell does).
 
-    With ``fast`` (a literal: each value is compiled on its own), the cells
+    With ``fast`` (a constant: :func:`step_region_fast` and :func:`step_region_full` are
+    its two compiled versions), the cells
     are taken first by :func:`_fast_cells`; each cell that needs more gets the
     full update, and the fast loop resumes after it: the same frames either
     way. Returns how well the fast loop did: the cells of the rows updated,
@@ -260,7 +261,6 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     first_cx = x0 >> CHUNK_SHIFT
     segments = ((x1 - 1) >> CHUNK_SHIFT) - first_cx + 1
     present = also_present
-    numba.literally(fast)  # two versions, compiled apart: with and without the fast loop
     visited = 0  # cells of the rows updated, and how many of them the fast loop handed on to the full update
     handed_on = 0
     far = height * width > CACHED_CELLS  # prefetch rows ahead
@@ -316,6 +316,18 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     return visited - HANDED_ON_COST * handed_on if fast else 0
 
 
+@in_place
+def step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present):
+    """:func:`step_region` with its fast loop."""
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, True)
+
+
+@in_place
+def step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present):
+    """:func:`step_region` without its fast loop: every cell gets the full update."""
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
+
+
 @compiled  # called, not inlined: inlined in the serial step it ran 3 to 7% slower (bench --against)
 def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route):
     """Heat, then cells, in tile number ``tile`` (row-major), with or without :func:`step_region`'s fast loop (see :func:`step`)."""
@@ -327,9 +339,9 @@ def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
     y1 = min(y0 + TILE, height)
     conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
     if route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0)):
-        fast_gain[tile] = step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, True)
+        fast_gain[tile] = step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present)
     else:
-        step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
+        step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present)
 
 
 @parallel
