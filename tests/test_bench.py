@@ -149,11 +149,28 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
 
     for name in ("step", "take_detonations", "explode", "conduct"):
         monkeypatch.setattr(kernel, name, getattr(Recording(), name))
-    monkeypatch.setattr(warmup, "_compile_parts", lambda progress: called.append("parts"))  # no compiling processes
+    monkeypatch.setattr(warmup, "_compile_parts", lambda progress, stepped: (called.append("parts"), stepped()))  # no processes
     assert not kernelcache.is_compiled()
     compile_kernels(ruleset)
     assert called == ["parts", "step", "conduct", "take_detonations", "explode"]
     assert kernelcache.is_compiled()
+
+
+def test_warmup_compiles_for_one_thread_and_several_and_says_where(tmp_path, monkeypatch):
+    called = []
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # an empty cache: as on a first run
+    monkeypatch.setattr(warmup, "compile_kernels", lambda announce: called.append("one thread") or 0.0)
+    monkeypatch.setattr(warmup, "compile_parallel", lambda announce: called.append("several"))
+    first = CliRunner().invoke(cli, ["warmup"])
+    assert first.exit_code == 0 and called == ["one thread", "several"]
+    assert kernelcache.NOTICE in first.stderr and "compiled in" in first.stderr and "cache" in first.stderr.splitlines()[-1]
+    assert CliRunner().invoke(cli, ["warmup", "-q"]).stderr == ""
+
+
+def test_warmup_with_the_kernel_compiled_loads_it():
+    warmup.compile_new_kernels()  # as the test session's start does, if it has not
+    result = CliRunner().invoke(cli, ["warmup"])
+    assert result.exit_code == 0 and result.stderr.startswith("already compiled: loaded in")
 
 
 @pytest.mark.slow  # compiles the kernel anew

@@ -763,6 +763,30 @@ def schema(world, output) -> None:
         _write_new(output, text, replace=True)
 
 
+@cli.command()
+@click.option("-q", "--quiet", is_flag=True, help="Say nothing but errors.")
+def warmup(quiet) -> None:
+    """Compile the kernel now, so that later commands start at once.
+
+    \b
+    Every command compiles it when a new sandmod version first needs it;
+    run this where waiting then would hurt: building a container image, a
+    CI job's setup (keep the cache folder it names between jobs), before a
+    class or a demo. It compiles the kernels for several threads too."""
+    from sandmod.engine import kernelcache
+    from sandmod.jobs.warmup import compile_kernels, compile_parallel
+
+    say = (lambda line: None) if quiet else _say
+    fresh = not kernelcache.is_compiled()
+    if fresh:
+        say(kernelcache.NOTICE)
+    started = time.perf_counter()
+    compile_kernels(announce=say)
+    compile_parallel(announce=say)
+    done = "compiled" if fresh else "already compiled: loaded"
+    say(f"{done} in {time.perf_counter() - started:.1f} s, kept in {display_path(kernelcache.kernel_cache_dir())}")
+
+
 @cli.command("test")
 @click.argument("mods", nargs=-1)
 @_mods_option

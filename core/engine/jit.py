@@ -26,10 +26,10 @@ os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when n
 import numba  # noqa: E402
 from numba import njit, prange  # noqa: E402, F401
 
-from . import inlining  # noqa: E402
+from . import compiletime  # noqa: E402
 
 numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was imported before us
-inlining.install()  # compiling the cell update takes a quarter of the time (see the module)
+compiletime.install()  # the cell update compiles in a quarter of the time (see the module)
 
 compiled = njit(cache=True)
 inlined = njit(cache=True, inline="always")

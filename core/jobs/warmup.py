@@ -25,8 +25,10 @@ from typing import Callable
 
 import numpy as np
 
-#: The parts compiled side by side, longest first.
-PARTS = ("cells with the fast loop", "cells without it", "heat", "blasts", "taps and sprays", "pixels")
+#: The parts compiled side by side, longest first, then those a first frame needs.
+PARTS = ("cells with the fast loop", "cells without it", "heat", "pixels", "blasts", "taps and sprays")
+#: The parts a step of a world links together (the rest are called on their own).
+STEP_NEEDS = PARTS[:3]
 
 
 def _tiny_world():
@@ -72,12 +74,17 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
 
     started = time.perf_counter()
     say = announce or (lambda line: None)
-    if not kernelcache.is_compiled():
-        _compile_parts(lambda done: say(f"compiling the kernel: {done} of {len(PARTS)} parts done, {time.perf_counter() - started:.0f} s"))
-        say("compiling the kernel: putting the parts together...")
     world = _tiny_world() if ruleset is None else _world_of(ruleset)
     world.threads = 1
-    world.step()
+
+    def put_together() -> None:  # a step links the cells' parts and heat: here, while the rest compile
+        say("compiling the kernel: putting the parts together...")
+        world.step()
+
+    if not kernelcache.is_compiled():
+        _compile_parts(lambda done: say(f"compiling the kernel: {done} of {len(PARTS)} parts done, {time.perf_counter() - started:.0f} s"), put_together)
+    else:
+        world.step()
     for part in PARTS[2:]:  # in the cache by now: loaded, not compiled
         compile_part(part)
     kernelcache.mark_compiled()
@@ -126,27 +133,35 @@ def _cached(function: str) -> bool:
     return any(kernel_cache_dir().rglob(f"kernel.{function}-*.nbi"))
 
 
-def _compile_parts(progress: Callable[[int], object]) -> None:
-    """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs."""
+def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[], object]) -> None:
+    """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs; call
+    ``once_stepped`` as soon as those a step needs (:data:`STEP_NEEDS`) are done, while the others compile."""
     waiting = list(PARTS)
-    running: list[subprocess.Popen] = []
+    running: dict[subprocess.Popen, str] = {}
+    finished: set[str] = set()
     done = 0
     most = max(1, min(os.cpu_count() or 1, len(PARTS)))
     env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
     try:
         while waiting or running:
             while waiting and len(running) < most:
-                command = [sys.executable, "-m", "sandmod.jobs.warmup", waiting.pop(0)]
+                part = waiting.pop(0)
+                command = [sys.executable, "-m", "sandmod.jobs.warmup", part]
                 # What fails here fails again, and says why, when this process compiles it itself.
-                running.append(subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+                running[subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)] = part
             time.sleep(0.05)
             for process in [p for p in running if p.poll() is not None]:
-                running.remove(process)
+                finished.add(running.pop(process))
                 done += 1
                 progress(done)
+                if finished >= set(STEP_NEEDS) and once_stepped is not None:
+                    once_stepped()
+                    once_stepped = None
     finally:
         for process in running:
             process.kill()
+    if once_stepped is not None:
+        once_stepped()
 
 
 def _cache_dir():
