@@ -55,3 +55,29 @@ def prints_what_it_shows(shown: str, output: str) -> bool:
     want = DECIMAL.sub("#", shown).strip().splitlines()
     got = DECIMAL.sub("#", output).strip().splitlines()
     return len(got) >= len(want) and [line.rstrip() for line in got[len(got) - len(want):]] == [line.rstrip() for line in want]
+
+
+def refreshed(page: str, outputs: dict[str, str]) -> str:
+    """``page`` with the figures of each block of what a command prints (see :func:`steps`) made
+    again from ``outputs`` (a command -> what it printed, as ``test_docs.follow`` returns):
+    each shown line becomes the printed line it stands for. Raises ValueError where a block
+    shows more than the figures differently from what its command printed."""
+    parts, done, after_bash, found = [], 0, -1, []
+    for block in BLOCK.finditer(page):
+        language, title, body = block.groups()
+        if title:
+            found.append(Step("file", body, title))
+        elif language == "bash":
+            found += [Step("command", line.split(" #")[0].strip()) for line in body.splitlines() if line.split(" #")[0].strip()]
+        elif language == "text" and after_bash >= 0 and not page[after_bash : block.start()].strip():
+            command = last_command(found)
+            if command in outputs:
+                if not prints_what_it_shows(body, outputs[command]):
+                    raise ValueError(f"{command} printed\n{outputs[command]}\nnot\n{body}")
+                shown = body.rstrip("\n").splitlines()
+                printed = outputs[command].strip().splitlines()[-len(shown) :]
+                start = block.start(3)
+                parts += [page[done:start], "\n".join(line.rstrip() for line in printed) + "\n"]
+                done = block.end(3)
+        after_bash = block.end() if language == "bash" else -1
+    return "".join(parts) + page[done:]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from pages import BLOCK, prints_what_it_shows, steps
+from pages import BLOCK, prints_what_it_shows, refreshed, steps
 
 ROOT = Path(__file__).parent.parent
 TUTORIAL = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
@@ -95,6 +95,16 @@ def test_the_pages_show_what_commands_print_and_name_what_is_not_run():
     assert sum(step.kind == "script" for step in shown) >= 1
     commands = {step.text for step in shown if step.kind == "command"}
     assert set(NOT_RUN) <= commands, set(NOT_RUN) - commands
+
+
+def test_a_pages_figures_are_made_again_from_what_its_commands_print():
+    """What tools/dev/pages.py writes: each shown line becomes the printed one, figures and all."""
+    page = "Run it:\n\n```bash\nsandmod render w.toml\n```\n\n```text\nwrote w.gif in 0.4 s (1.00 MB)\n```\n\nThen more.\n"
+    printed = {"sandmod render w.toml": "compiling...\nwrote w.gif in 1.3 s (1.02 MB)\n"}
+    assert refreshed(page, printed) == page.replace("0.4 s (1.00", "1.3 s (1.02")
+    assert refreshed(page, {}) == page  # a command not run: left as it is
+    with pytest.raises(ValueError, match="printed"):
+        refreshed(page, {"sandmod render w.toml": "wrote x.gif in 1.3 s (1.02 MB)\n"})  # more than figures differ
 
 
 def test_every_piece_of_python_on_a_page_is_python():
