@@ -136,6 +136,38 @@ def test_list_provenance_shows_overrides(tmp_path, monkeypatch):
     assert "color ['#dcc38a', '#d2b478', '#e4cf9c'] -> ['#cc3322']" in lines[at + 1]
 
 
+def test_a_patch_changes_the_fields_it_names_and_keeps_the_rest(tmp_path, monkeypatch):
+    from sandmod.world.loading import load_ruleset
+
+    write_mods(tmp_path / "mods", {"heavy.toml": '[mod]\nname = "heavy"\nrequires = ["sand"]\n[elements."sand:sand"]\ndensity = 1800\n'})
+    bundled = {e.id: e.spec for e in load_ruleset().elements}["sand:sand"]
+    patched = {e.id: e for e in load_ruleset(mod_dirs=[tmp_path / "mods"]).elements}["sand:sand"]
+    assert patched.spec.density == 1800 and bundled.density != 1800
+    assert patched.spec.model_dump(exclude={"density"}) == bundled.model_dump(exclude={"density"})  # its melting point too
+    assert patched.defined_by == "sand" and patched.history[0].describe().endswith(f"heavy.toml:4): density {bundled.density!r} -> 1800.0")
+    monkeypatch.chdir(tmp_path)
+    lines = invoke("list", "--provenance").stdout.splitlines()
+    assert lines[lines.index(next(line for line in lines if line.startswith("sand:sand: "))) + 1].startswith("  patched by heavy (mods/heavy.toml:4): density")
+
+
+def test_a_patch_is_checked_as_the_element_it_makes(tmp_path, monkeypatch):
+    patch = '[mod]\nname = "heavy"\nrequires = REQUIRES\n[elements."sand:sand"]\ndensity = -5\ndensty = 3\n[elements."water:waterr"]\ndensity = 900\n[elements."water:water"]\nheated = { above = 90 }\n'
+    write_mods(tmp_path / "mods", {"heavy.toml": patch.replace("REQUIRES", '["sand", "water"]')})
+    monkeypatch.chdir(tmp_path)
+    result = invoke("validate", "mods")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines() == [
+        "mods/heavy.toml:5:1: elements.sand:sand.density: must be > 0 (got -5)",
+        "mods/heavy.toml:6:1: elements.sand:sand.densty: unknown field; allowed here: " + result.stderr.split("allowed here: ")[1].splitlines()[0],
+        "mods/heavy.toml:7:1: elements.water:waterr: 'water:waterr' is not defined by any loaded mod (nothing to change: a mod that "
+        "changes another's element names it in requires, to load after it)",
+        "mods/heavy.toml:10:1: elements.water:water.heated.becomes: required field is missing",  # a table is replaced whole
+    ]
+    assert "density" in result.stderr.split("allowed here: ")[1]
+    write_mods(tmp_path / "mods", {"heavy.toml": patch.replace("REQUIRES", "[]")})  # loaded before sand: nothing to patch yet
+    assert "'sand:sand' is not defined by any loaded mod" in invoke("validate", "mods").stderr
+
+
 def test_a_new_world_pours_the_users_own_element_else_sand(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     poured = lambda: tomllib.loads((tmp_path / "w.toml").read_text())["emitters"][0]["element"]

@@ -33,7 +33,7 @@ from typing import Annotated, Literal, Union
 
 from packaging.specifiers import InvalidSpecifier, SpecifierSet
 from packaging.version import InvalidVersion, Version
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
 from ..engine.layout import ARCHETYPES, MAX_SPEED, MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: F401  (taken from here too)
@@ -415,6 +415,12 @@ Element = Annotated[
 ]
 
 
+class PatchedElement(BaseModel):
+    """An element with a patch applied, checked whole (see :func:`.validation.validate_changed`)."""
+
+    element: Element
+
+
 class Reaction(_Strict):
     """When a cell matching ``a`` touches one matching ``b``, they may turn into other elements.
 
@@ -579,8 +585,27 @@ class ModFile(_Strict):
     mod: ModInfo = Field(description="Name, version and dependencies of the mod.")
     elements: dict[ElementName, Element] = Field(
         default_factory=dict,
-        description="The elements this mod defines, by name ('NAME' or 'othermod:NAME' to override).",
+        description="The elements this mod defines, by name; 'othermod:NAME' without an archetype changes only the fields it names of another mod's element.",
     )
+    _patches: dict[str, dict] = PrivateAttr(default_factory=dict)
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _patches_apart(cls, data, handler):
+        """Set apart the tables of other mods' elements that have no archetype: patches, checked when applied."""
+        patches = {}
+        if isinstance(data, dict) and isinstance(data.get("elements"), dict):
+            patches = {k: v for k, v in data["elements"].items() if ":" in str(k) and isinstance(v, dict) and "archetype" not in v}
+            if patches:
+                data = {**data, "elements": {k: v for k, v in data["elements"].items() if k not in patches}}
+        model = handler(data)
+        model._patches = patches
+        return model
+
+    @property
+    def patches(self) -> dict[str, dict]:
+        """Tables of other mods' elements that name only the fields they change (no archetype), as written."""
+        return self._patches
     reactions: list[Reaction] = Field(default_factory=list, description="Reactions between touching cells.")
     tests: list[ModTest] = Field(default_factory=list, description="Interaction tests, run by 'sandmod test' and pytest.")
 

@@ -36,6 +36,28 @@ def validate(model: type[M], source: TomlSource) -> M:
         raise ProblemsError(sorted(set(problems), key=lambda p: (p.line or 0, p.path, p.message))) from None
 
 
+def validate_changed(model: type[M], data: dict, source: TomlSource, at: Loc, written: set[str]) -> M:
+    """Validate ``data`` as ``model``'s one field: a table that ``source`` does not state whole but
+    changes at ``at`` (it wrote the fields ``written``; the rest come from elsewhere). Raise
+    ProblemsError naming each mistake at ``at`` and the field's path where the file wrote that
+    field, else at ``at`` itself, saying the field is not the file's."""
+    from ..errors import ProblemsError
+
+    (name,) = model.model_fields
+    try:
+        return model.model_validate({name: data})
+    except ValidationError as exc:
+        problems = []
+        for err in exc.errors():
+            loc = _written_loc({name: data}, tuple(err["loc"]), err["type"] == "missing")[1:]
+            message = _message(model, {name: data}, (name, *loc), err)
+            if not loc or loc[0] in written:  # a field written here, or the table's own check across its fields
+                problems.append(source.problem((*at, *loc), message))
+            else:
+                problems.append(source.problem(at, f"{'.'.join(map(str, loc))} (not changed here): {message}"))
+        raise ProblemsError(sorted(set(problems), key=lambda p: (p.line or 0, p.path, p.message))) from None
+
+
 def _behind_field_mistakes(model: type[BaseModel], data: Any, errors: list) -> list:
     """The mistakes a table's own checks across its fields find (``burn_temperature must be at least
     ignites_at``), which pydantic makes only once every field of the table is right: found by

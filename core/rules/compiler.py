@@ -42,7 +42,8 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     TEMP_ONE,
 )
 from .modset import LoadedMod
-from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
+from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element, PatchedElement, Reaction
+from ..formats.validation import validate_changed
 from ..formats.tomlsource import TomlSource
 
 #: Most elements a ruleset may hold (palette renders use 256 colours).
@@ -136,17 +137,18 @@ class ElementInfo:
 
 @dataclass(frozen=True)
 class Override:
-    """One mod replacing an element another mod defined: where, and the fields whose values changed."""
+    """One mod replacing an element another mod defined, or patching some of its fields: where, and the fields whose values changed."""
 
     mod: str
     file: str
     line: int | None
     changes: tuple[tuple[str, object, object], ...]  # (field, before, after)
+    patch: bool = False  # only the fields it names changed (the rest kept), or the whole element replaced
 
     def describe(self) -> str:
         where = self.file if self.line is None else f"{self.file}:{self.line}"
         changed = "; ".join(f"{name} {before!r} -> {after!r}" for name, before, after in self.changes) or "no values changed"
-        return f"overridden by {self.mod} ({where}): {changed}"
+        return f"{'patched' if self.patch else 'overridden'} by {self.mod} ({where}): {changed}"
 
 
 def _differences(before: Element, after: Element) -> tuple[tuple[str, object, object], ...]:
@@ -452,7 +454,30 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dic
                 defs[element_id] = _Definition(
                     spec, mod.source, mod.name, loc, previous.replaced + [previous.mod], previous.history + [change]
                 )
+        for element_id, fields in mod.spec.patches.items():
+            _patch(defs, element_id, fields, mod, problems)
     return defs
+
+
+def _patch(defs: dict[str, _Definition], element_id: str, fields: dict, mod: LoadedMod, problems: list[Problem]) -> None:
+    """Apply a mod's patch of another mod's element (a table of the fields it changes): the
+    element keeps its other fields; the result is checked as a whole element would be."""
+    loc = ("elements", element_id)
+    previous = defs.get(element_id)
+    if previous is None:
+        problems.append(mod.source.problem(loc, f"'{element_id}' is not defined by any loaded mod (nothing to change: "
+                                           f"a mod that changes another's element names it in requires, to load after it)"))
+        return
+    given = {name: value for name, value in fields.items() if name != "override"}
+    merged = {**previous.spec.model_dump(mode="json", exclude={"override"}, exclude_none=True), **given}
+    try:
+        spec = validate_changed(PatchedElement, merged, mod.source, loc, set(given)).element
+    except ProblemsError as mistakes:
+        problems.extend(mistakes.problems)
+        return
+    change = Override(mod.name, mod.source.name, mod.source.line_of(loc), _differences(previous.spec, spec), patch=True)
+    # still the element its mod defined (its names resolve as that mod's), changed: the change is in its history
+    defs[element_id] = _Definition(spec, previous.source, previous.mod, previous.loc, previous.replaced, previous.history + [change])
 
 
 def _resolve(ref: str, mod: str | None, ids: dict[str, int], requires: Sequence[str] = ()) -> tuple[str | None, str]:
