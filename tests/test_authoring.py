@@ -150,6 +150,22 @@ def test_a_patch_changes_the_fields_it_names_and_keeps_the_rest(tmp_path, monkey
     assert lines[lines.index(next(line for line in lines if line.startswith("sand:sand: "))) + 1].startswith("  patched by heavy (mods/heavy.toml:4): density")
 
 
+def test_one_field_patched_by_two_mods_that_do_not_require_each_other_is_a_warning(tmp_path, monkeypatch):
+    def patch(name: str, requires: str, density: int) -> str:
+        return f'[mod]\nname = "{name}"\nrequires = [{requires}]\n[elements."sand:sand"]\ndensity = {density}\nfriction = 0.5\n'
+
+    monkeypatch.chdir(tmp_path)
+    write_mods(tmp_path / "mods", {"light.toml": patch("light", '"sand"', 900), "heavy.toml": patch("heavy", '"sand"', 1800)})
+    result = invoke("validate", "mods")
+    assert result.exit_code == 0
+    warned = [line for line in result.stderr.splitlines() if line.startswith("warning: ")]
+    assert len(warned) == 2 and all("also patched by heavy (" in line and "light does not require" in line for line in warned)
+    assert warned[0].startswith("warning: mods/light.toml:5:1: elements.sand:sand.density: ")
+    assert warned == [line for line in invoke("list").stderr.splitlines() if line.startswith("warning: ")]
+    write_mods(tmp_path / "mods", {"light.toml": patch("light", '"sand", "heavy"', 900)})  # light builds on heavy: its value is meant
+    assert "warning" not in invoke("validate", "mods").stderr
+
+
 def test_a_patch_is_checked_as_the_element_it_makes(tmp_path, monkeypatch):
     patch = '[mod]\nname = "heavy"\nrequires = REQUIRES\n[elements."sand:sand"]\ndensity = -5\ndensty = 3\n[elements."water:waterr"]\ndensity = 900\n[elements."water:water"]\nheated = { above = 90 }\n'
     write_mods(tmp_path / "mods", {"heavy.toml": patch.replace("REQUIRES", '["sand", "water"]')})

@@ -313,6 +313,8 @@ def list_(as_json, provenance, mod_dirs) -> None:
     from sandmod.world.loading import load_ruleset
 
     ruleset = load_ruleset(None, _mod_folders(mod_dirs))
+    for warning in ruleset.warnings:
+        click.echo(printable(f"warning: {warning}"), err=True)
     if provenance and not as_json:
         _provenance(ruleset)
         return

@@ -84,6 +84,7 @@ def check(
     report.problems += _behind_mistakes(modset)
     if ruleset is not None:
         report.mods, report.elements, report.reactions = len(ruleset.mods), len(ruleset.elements), len(ruleset.reactions)
+        report.warnings += ruleset.warnings
         runner = TestRunner(modset)
         for case in runner.cases([m.name for m in ruleset.mods]):
             report.tests += 1

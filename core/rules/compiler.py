@@ -183,6 +183,8 @@ class Ruleset:
     #: Palette indices per element: shades, scorched shades, glow levels.
     looks: "Looks"
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
+    #: What loads but may not be what the mods' authors meant: one field patched by two mods that do not require each other.
+    warnings: tuple[Problem, ...] = ()
 
     @property
     def particle(self) -> int:
@@ -209,7 +211,8 @@ class Ruleset:
 def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     """Compile mods (in load order) into a :class:`Ruleset`; ProblemsError lists every mistake."""
     problems: list[Problem] = []
-    defs = _collect_elements(mods, problems)
+    warnings: list[Problem] = []
+    defs = _collect_elements(mods, problems, warnings)
     for required, archetype in ((EMPTY_ID, "empty"), (PARTICLE_ID, "particle")):
         found = defs.get(required)
         if found is None:
@@ -266,7 +269,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     if problems:
         raise ProblemsError(problems)
     palette, looks = _palette(elements, t.heat_recip)
-    return Ruleset(tuple(mods), elements, reactions, t, palette, looks, ids)
+    return Ruleset(tuple(mods), elements, reactions, t, palette, looks, ids, tuple(warnings))
 
 
 def _fill_element(t: Tables, info: ElementInfo, d: "_Definition", problems: list[Problem]) -> None:
@@ -427,10 +430,12 @@ class _Definition:
     loc: tuple
     replaced: list[str] = field(default_factory=list)
     history: list[Override] = field(default_factory=list)
+    patched: dict[str, Override] = field(default_factory=dict)  # each field patches set: the last patch that set it
 
 
-def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dict[str, _Definition]:
+def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem], warnings: list[Problem]) -> dict[str, _Definition]:
     defs: dict[str, _Definition] = {}
+    below = _required_below(mods)
     for mod in mods:
         for key, spec in mod.spec.elements.items():
             loc = ("elements", key)
@@ -456,7 +461,32 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem]) -> dic
                 )
         for element_id, fields in mod.spec.patches.items():
             _patch(defs, element_id, fields, mod, problems)
+            _warn_of_rival_patches(defs.get(element_id), element_id, fields, mod, below, warnings)
     return defs
+
+
+def _required_below(mods: Sequence[LoadedMod]) -> dict[str, set[str]]:
+    """Each mod's requirements, theirs and so on."""
+    below: dict[str, set[str]] = {}
+    for mod in mods:  # in load order: a mod's requirements come before it
+        below[mod.name] = set(mod.requires).union(*(below.get(name, set()) for name in mod.requires))
+    return below
+
+
+def _warn_of_rival_patches(d: "_Definition | None", element_id: str, fields: dict, mod: LoadedMod, below: dict[str, set[str]], warnings: list[Problem]) -> None:
+    """Note the fields ``mod``'s patch sets that a patch of a mod it does not require (nor that
+    requires it) set before: its value wins by load order alone. Then note its own."""
+    if d is None or not d.history or d.history[-1].mod != mod.name:
+        return  # the patch was not applied
+    mine = d.history[-1]
+    for name in fields:
+        if name == "override":
+            continue
+        earlier = d.patched.get(name)
+        if earlier is not None and earlier.mod not in below[mod.name] and mod.name not in below.get(earlier.mod, set()):
+            warnings.append(mod.source.problem(("elements", element_id, name), f"also patched by {earlier.mod} ({earlier.file}:{earlier.line}), "
+                                               f"which {mod.name} does not require: {mod.name}'s value is kept, by load order alone"))
+        d.patched[name] = mine
 
 
 def _patch(defs: dict[str, _Definition], element_id: str, fields: dict, mod: LoadedMod, problems: list[Problem]) -> None:
@@ -477,7 +507,7 @@ def _patch(defs: dict[str, _Definition], element_id: str, fields: dict, mod: Loa
         return
     change = Override(mod.name, mod.source.name, mod.source.line_of(loc), _differences(previous.spec, spec), patch=True)
     # still the element its mod defined (its names resolve as that mod's), changed: the change is in its history
-    defs[element_id] = _Definition(spec, previous.source, previous.mod, previous.loc, previous.replaced, previous.history + [change])
+    defs[element_id] = _Definition(spec, previous.source, previous.mod, previous.loc, previous.replaced, previous.history + [change], dict(previous.patched))
 
 
 def _resolve(ref: str, mod: str | None, ids: dict[str, int], requires: Sequence[str] = ()) -> tuple[str | None, str]:
