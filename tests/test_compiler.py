@@ -175,8 +175,75 @@ def test_reactions_of_equal_rank_that_disagree_are_an_error(registry, tmp_path):
     )
     assert problems == [
         "mods/fizz.toml:11:1: reactions.1: fizz:foam + sand:sand also reacts differently at mods/fizz.toml:5 "
-        "(reactions.0); make one selector more specific",
+        "(reactions.0); make one selector more specific, or give one a higher priority",
     ]
+
+
+VOIDS = """
+[mod]
+name = "voids"
+requires = [REQUIRES]
+
+[elements.void]
+archetype = "static"
+color = "#101010"
+tags = ["device"]
+
+[[reactions]]
+a = "void"
+b = "!#device"
+b_becomes = "empty"
+chance = 0.5
+PRIORITY
+"""
+
+VIRUSES = """
+[mod]
+name = "viruses"
+
+[elements.virus]
+archetype = "powder"
+color = "#80ff40"
+density = 1000
+tags = ["immune"]
+
+[[reactions]]
+a = "virus"
+b = "!#immune"
+b_becomes = "virus"
+chance = 0.2
+"""
+
+
+def _void_and_virus(registry, tmp_path, requires="", priority=""):
+    """The ruleset of the voids and viruses mods (two folders: their authors never met), and what void + virus does."""
+    voids = write_mods(tmp_path / "voids", {"voids.toml": VOIDS.replace("REQUIRES", requires).replace("PRIORITY", priority)})
+    viruses = write_mods(tmp_path / "viruses", {"viruses.toml": VIRUSES})
+    ruleset = load_ruleset(None, [voids, viruses], registry)
+    void, virus = ruleset.index("voids:void"), ruleset.index("viruses:virus")
+    outcome = (ruleset.elements[ruleset.tables.react_into_a[void, virus]].id, ruleset.elements[ruleset.tables.react_into_b[void, virus]].id)
+    return ruleset, outcome
+
+
+def test_two_mods_whose_reactions_tie_load_together_the_later_applies_with_a_warning(registry, tmp_path):
+    ruleset, outcome = _void_and_virus(registry, tmp_path)
+    assert [m.name for m in ruleset.mods].index("voids") > [m.name for m in ruleset.mods].index("viruses")
+    assert outcome == ("voids:void", "base:empty")  # the void, loaded later, eats the virus
+    tie = [str(w) for w in ruleset.warnings if "voids:void + viruses:virus" in str(w)]
+    assert tie == [
+        "voids/voids.toml:10:1: reactions.0: voids:void + viruses:virus also reacts differently at "
+        "viruses/viruses.toml:10 (reactions.0), as specific and of the same priority: this one applies, "
+        "voids being loaded after viruses (a higher priority on one would say which)"
+    ]
+
+
+def test_a_higher_priority_or_a_requirement_decides_a_tie_without_a_warning(registry, tmp_path):
+    ruleset, outcome = _void_and_virus(registry, tmp_path, priority="priority = -1")
+    assert outcome == ("viruses:virus", "viruses:virus")  # the virus infects the void
+    assert not [w for w in ruleset.warnings if "voids:void + viruses:virus" in str(w)]
+    ruleset, outcome = _void_and_virus(registry, tmp_path, requires='"viruses"')  # voids builds on viruses: its rule is meant
+    assert outcome == ("voids:void", "base:empty")
+    assert not [w for w in ruleset.warnings if "voids:void + viruses:virus" in str(w)]
 
 
 def test_unknown_element_suggests_a_name(registry, tmp_path):

@@ -448,6 +448,14 @@ class Reaction(_Strict):
         description="Degrees added to each cell that changes: positive releases heat, negative absorbs it.",
         examples=[50],
     )
+    priority: int = Field(
+        0,
+        ge=-1000,
+        le=1000,
+        description="Of two reactions that match a pair as specifically, the one with the higher priority applies "
+        "(then the one of the mod loaded later; see the reactions how-to).",
+        examples=[1],
+    )
 
     @model_validator(mode="after")
     def _changes_something(self) -> "Reaction":

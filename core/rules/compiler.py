@@ -264,7 +264,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
             elif what is not None:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
-    reactions = _compile_reactions(mods, elements, t, resolve, problems)
+    reactions = _compile_reactions(mods, elements, t, resolve, problems, warnings, _required_below(mods))
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
@@ -608,31 +608,28 @@ def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tupl
     return (non_empty - matched, 1) if negate else (matched, score)
 
 
-def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[CompiledReaction, ...]:
-    """Fill the interaction matrix; the more specific of two reactions on a pair wins."""
-    # pair -> (score, mod, reaction number, (a becomes, b becomes, threshold, lowest and highest T sum, heat))
-    winner: dict[tuple[int, int], tuple[int, LoadedMod, int, tuple[int, int, int]]] = {}
-    reported: set[tuple[str, int, str, int]] = set()  # conflicts already named, by both reactions
+def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, below) -> tuple[CompiledReaction, ...]:
+    """Fill the interaction matrix. Of two reactions on a pair, the more specific wins (names over
+    tags over wildcards), then the one with the higher ``priority``, then the one of the mod loaded
+    later: a warning where neither mod requires the other, an error within one mod."""
+    # pair -> ((specificity, priority), mod, reaction number, (a becomes, b becomes, threshold, lowest and highest T sum, heat))
+    winner: dict[tuple[int, int], tuple[tuple[int, int], LoadedMod, int, tuple]] = {}
+    reported: set[tuple[str, int, str, int]] = set()  # ties already named, by both reactions
     compiled: list[CompiledReaction] = []
 
-    def claim(pair, outcome, score, mod, number) -> None:
+    def claim(pair, outcome, rank, mod, number) -> None:
         held = winner.get(pair)
-        if held is not None and (held[0] > score or (held[0] == score and held[3] == outcome)):
+        if held is not None and (held[0] > rank or (held[0] == rank and held[3] == outcome)):
             return
-        if held is not None and held[0] == score:
-            conflict = (mod.name, number, held[1].name, held[2])
-            if conflict not in reported:
-                reported.add(conflict)
-                earlier = held[1].source.problem(("reactions", held[2]), "")
-                problems.append(
-                    mod.source.problem(
-                        ("reactions", number),
-                        f"{elements[pair[0]].id} + {elements[pair[1]].id} also reacts differently at "
-                        f"{earlier.file}:{earlier.line} ({earlier.path}); make one selector more specific",
-                    )
-                )
-            return
-        winner[pair] = (score, mod, number, outcome)
+        if held is not None and held[0] == rank:  # a tie: the later mod's wins; within a mod, an error
+            tie = (mod.name, number, held[1].name, held[2])
+            if held[1].name == mod.name or held[1].name not in below[mod.name]:
+                if tie not in reported:
+                    reported.add(tie)
+                    _report_tie(elements, pair, mod, number, held, problems if held[1].name == mod.name else warnings)
+                if held[1].name == mod.name:
+                    return
+        winner[pair] = (rank, mod, number, outcome)
 
     for mod in mods:
         for number, reaction in enumerate(mod.spec.reactions):
@@ -652,9 +649,10 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[Co
                 for j in sorted(set_b):
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
-                    claim((i, j), (out_i, out_j, threshold, low, high, heat), score_a + score_b, mod, number)
+                    rank = (score_a + score_b, reaction.priority)
+                    claim((i, j), (out_i, out_j, threshold, low, high, heat), rank, mod, number)
                     if i != j:  # the same contact, seen from the other cell
-                        claim((j, i), (out_j, out_i, threshold, low, high, heat), score_a + score_b, mod, number)
+                        claim((j, i), (out_j, out_i, threshold, low, high, heat), rank, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
@@ -666,6 +664,18 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems) -> tuple[Co
     t.reactive[:] = element_masks(t.react_chance)
     problems.extend(_endless_reactions(winner, elements))
     return tuple(compiled)
+
+
+def _report_tie(elements, pair, mod, number, held, into: list[Problem]) -> None:
+    """Name two reactions that match ``pair`` as specifically, at one priority: an error within a mod,
+    a warning between two (the later one's applies)."""
+    earlier = held[1].source.problem(("reactions", held[2]), "")
+    what = f"{elements[pair[0]].id} + {elements[pair[1]].id} also reacts differently at {earlier.file}:{earlier.line} ({earlier.path})"
+    if held[1].name == mod.name:
+        into.append(mod.source.problem(("reactions", number), f"{what}; make one selector more specific, or give one a higher priority"))
+    else:
+        into.append(mod.source.problem(("reactions", number), f"{what}, as specific and of the same priority: this one applies, "
+                                       f"{mod.name} being loaded after {held[1].name} (a higher priority on one would say which)"))
 
 
 def element_masks(pairs: np.ndarray) -> np.ndarray:
