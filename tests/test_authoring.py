@@ -166,6 +166,26 @@ def test_one_field_patched_by_two_mods_that_do_not_require_each_other_is_a_warni
     assert "warning" not in invoke("validate", "mods").stderr
 
 
+def test_an_element_like_another_takes_its_fields_and_replaces_those_it_gives(tmp_path, monkeypatch):
+    from sandmod.world.loading import load_ruleset
+
+    red = '[mod]\nname = "red"\nrequires = ["sand"]\n[elements.red_sand]\nlike = "sand"\ncolor = "#c04020"\n[elements.red_dust]\nlike = "red_sand"\ndensity = 900\n'
+    write_mods(tmp_path / "mods", {"red.toml": red})
+    specs = {e.id: e.spec for e in load_ruleset(mod_dirs=[tmp_path / "mods"]).elements}
+    sand, red_sand, red_dust = specs["sand:sand"], specs["red:red_sand"], specs["red:red_dust"]
+    assert red_sand.color == ["#c04020"] and red_sand.like == "sand:sand" and red_dust.like == "red:red_sand"
+    assert red_sand.model_dump(exclude={"color", "like", "heated"}) == sand.model_dump(exclude={"color", "like", "heated"})
+    assert red_dust.density == 900 and red_dust.color == ["#c04020"] and red_dust.heated.becomes == "glass:glass"  # sand's glass, named whole
+    monkeypatch.chdir(tmp_path)
+    assert "red:red_dust: defined by red (mods/red.toml, plugin user), like red:red_sand" in invoke("list", "--provenance").stdout
+    write_mods(tmp_path / "mods", {"red.toml": red.replace('like = "red_sand"', 'like = "red_sandd"').replace("density = 900", "density = -1")})
+    result = invoke("validate", "mods")
+    assert result.exit_code == 2 and result.stderr.splitlines() == [
+        "mods/red.toml:8:1: elements.red_dust.like: unknown element 'red_sandd' (did you mean 'red_sand'?) "
+        "(an element defined before this one: in a mod it requires, or above it)"
+    ]
+
+
 def test_a_patch_is_checked_as_the_element_it_makes(tmp_path, monkeypatch):
     patch = '[mod]\nname = "heavy"\nrequires = REQUIRES\n[elements."sand:sand"]\ndensity = -5\ndensty = 3\n[elements."water:waterr"]\ndensity = 900\n[elements."water:water"]\nheated = { above = 90 }\n'
     write_mods(tmp_path / "mods", {"heavy.toml": patch.replace("REQUIRES", '["sand", "water"]')})

@@ -366,7 +366,8 @@ def _provenance(ruleset) -> None:
     file_of = {m.name: m.source.name for m in ruleset.mods}
     for e in ruleset.elements:
         origin = e.origin
-        click.echo(printable(f"{e.id}: defined by {origin} ({file_of[origin]}, plugin {plugin_of[origin]})"))
+        like = f", like {e.spec.like}" if e.spec.like else ""
+        click.echo(printable(f"{e.id}: defined by {origin} ({file_of[origin]}, plugin {plugin_of[origin]}){like}"))
         for change in e.history:
             click.echo(printable(f"  {change.describe()}"))
 

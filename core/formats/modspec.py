@@ -238,6 +238,12 @@ class _ElementBase(_Strict):
         False,
         description="Set to replace an element another mod defines (the key is then 'mod:element').",
     )
+    like: ElementName | None = Field(
+        None,
+        description="Start from this element's fields ('sand', or another mod's as 'mod:name', defined before): "
+        "those given here replace them; the archetype may be left out.",
+        examples=["sand:sand"],
+    )
     temperature: Temperature = Field(20.0, description="Temperature of a newly placed cell, in degrees Celsius.", examples=[-5])
     heat_capacity: float = Field(
         1.0, ge=0.05, le=10.0, description="Heat it takes to warm a cell by one degree, relative to stone (water 4)."
@@ -600,10 +606,11 @@ class ModFile(_Strict):
     @model_validator(mode="wrap")
     @classmethod
     def _patches_apart(cls, data, handler):
-        """Set apart the tables of other mods' elements that have no archetype: patches, checked when applied."""
+        """Set apart the tables of other mods' elements that have no archetype (patches) and those made
+        ``like`` another: checked once the fields they take are known (by the compiler)."""
         patches = {}
         if isinstance(data, dict) and isinstance(data.get("elements"), dict):
-            patches = {k: v for k, v in data["elements"].items() if ":" in str(k) and isinstance(v, dict) and "archetype" not in v}
+            patches = {k: v for k, v in data["elements"].items() if isinstance(v, dict) and (("like" in v) or (":" in str(k) and "archetype" not in v))}
             if patches:
                 data = {**data, "elements": {k: v for k, v in data["elements"].items() if k not in patches}}
         model = handler(data)
@@ -612,7 +619,8 @@ class ModFile(_Strict):
 
     @property
     def patches(self) -> dict[str, dict]:
-        """Tables of other mods' elements that name only the fields they change (no archetype), as written."""
+        """Tables of other mods' elements that name only the fields they change (no archetype), and
+        tables of elements made ``like`` another, as written."""
         return self._patches
     reactions: list[Reaction] = Field(default_factory=list, description="Reactions between touching cells.")
     tests: list[ModTest] = Field(default_factory=list, description="Interaction tests, run by 'sandmod test' and pytest.")

@@ -11,10 +11,12 @@ eagerly).
 from __future__ import annotations
 
 import difflib
+import typing
 from dataclasses import dataclass, field
 from typing import NamedTuple, Sequence
 
 import numpy as np
+from pydantic import BaseModel
 
 from ..errors import Problem, ProblemsError
 from ..engine.hashing import chance_threshold
@@ -42,7 +44,7 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     TEMP_ONE,
 )
 from .modset import LoadedMod
-from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element, PatchedElement, Reaction
+from ..formats.modspec import ELEMENT_REF, EMPTY_ID, PARTICLE_ID, Element, PatchedElement, Reaction
 from ..formats.validation import validate_changed
 from ..formats.tomlsource import TomlSource
 
@@ -231,13 +233,15 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     )
     by_mod = {m.name: m for m in mods}
 
+    below = _required_below(mods)
+
     def resolve(ref: str, mod: LoadedMod, loc: tuple) -> int | None:
         found, message = _resolve(ref, mod.name, ids, mod.requires)
         if found is None:
             problems.append(mod.source.problem(loc, message))
             return None
         owner = found.split(":", 1)[0]
-        if owner not in (mod.name, *mod.requires):
+        if owner != mod.name and owner not in below[mod.name]:  # a mod it requires, or one they require: loaded first
             problems.append(mod.source.problem(loc, f"'{found}' is from mod '{owner}'; add '{owner}' to mod.requires"))
             return None
         return ids[found]
@@ -264,7 +268,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
             elif what is not None:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
-    reactions = _compile_reactions(mods, elements, t, resolve, problems, warnings, _required_below(mods))
+    reactions = _compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
@@ -459,10 +463,37 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem], warnin
                 defs[element_id] = _Definition(
                     spec, mod.source, mod.name, loc, previous.replaced + [previous.mod], previous.history + [change]
                 )
-        for element_id, fields in mod.spec.patches.items():
-            _patch(defs, element_id, fields, mod, problems)
-            _warn_of_rival_patches(defs.get(element_id), element_id, fields, mod, below, warnings)
+        for key, fields in mod.spec.patches.items():
+            if "like" in fields:
+                _derive(defs, key, fields, mod, {m.name: m for m in mods}, problems)
+            else:
+                _patch(defs, key, fields, mod, problems)
+                _warn_of_rival_patches(defs.get(key), key, fields, mod, below, warnings)
     return defs
+
+
+def _derive(defs: dict[str, _Definition], key: str, fields: dict, mod: LoadedMod, by_name: dict[str, LoadedMod], problems: list[Problem]) -> None:
+    """Define an element ``like`` another defined before it: that one's fields, those given replacing them."""
+    loc = ("elements", key)
+    element_id = key if ":" in key else f"{mod.name}:{key}"
+    like = fields["like"]
+    base_id, message = _resolve(like, mod.name, dict.fromkeys(defs, 0), mod.requires) if isinstance(like, str) else (None, "must be an element name")
+    if element_id.split(":", 1)[0] != mod.name or element_id in defs:
+        problems.append(mod.source.problem(loc, f"'{element_id}' is not a new element of {mod.name}: 'like' makes a new one (a patch changes one)"))
+        return
+    if base_id is None:
+        problems.append(mod.source.problem(loc + ("like",), f"{message} (an element defined before this one: in a mod it requires, or above it)"))
+        return
+    given = {name: value for name, value in fields.items() if name != "like"}
+    base = defs[base_id]  # its names (glass, for sand's heated.becomes) as its own mod reads them
+    taken = _qualified(base.spec.model_dump(mode="json", exclude={"override", "like"}, exclude_none=True), type(base.spec),
+                       lambda ref: _resolve(ref, base.mod, dict.fromkeys(defs, 0), by_name[base.mod].requires)[0] or ref)
+    try:
+        spec = validate_changed(PatchedElement, {**taken, **given, "like": base_id}, mod.source, loc, set(fields)).element
+    except ProblemsError as mistakes:
+        problems.extend(mistakes.problems)
+        return
+    defs[element_id] = _Definition(spec, mod.source, mod.name, loc)
 
 
 def _required_below(mods: Sequence[LoadedMod]) -> dict[str, set[str]]:
@@ -487,6 +518,19 @@ def _warn_of_rival_patches(d: "_Definition | None", element_id: str, fields: dic
             warnings.append(mod.source.problem(("elements", element_id, name), f"also patched by {earlier.mod} ({earlier.file}:{earlier.line}), "
                                                f"which {mod.name} does not require: {mod.name}'s value is kept, by load order alone"))
         d.patched[name] = mine
+
+
+def _qualified(data: dict, model: type[BaseModel], qualify) -> dict:
+    """``data`` (``model`` dumped) with each element name in it, nested tables' too, as ``qualify`` gives it."""
+    out = dict(data)
+    for name, info in model.model_fields.items():
+        value = out.get(name)
+        if isinstance(value, str) and f"^{ELEMENT_REF}$" in repr(info):
+            out[name] = qualify(value)
+        elif isinstance(value, dict):
+            nested = [a for a in (info.annotation, *typing.get_args(info.annotation)) if isinstance(a, type) and issubclass(a, BaseModel)]
+            out[name] = _qualified(value, nested[0], qualify) if nested else value
+    return out
 
 
 def _patch(defs: dict[str, _Definition], element_id: str, fields: dict, mod: LoadedMod, problems: list[Problem]) -> None:
