@@ -25,6 +25,7 @@ class Step:
     kind: str  # "file", "command", "script" or "prints"
     text: str
     path: str = ""  # a file's path, for "file"; for "prints", the command it follows
+    span: tuple[int, int] = (0, 0)  # for "prints": where its text is in the page
 
 
 def steps(page: Path | str) -> list[Step]:
@@ -41,7 +42,7 @@ def steps(page: Path | str) -> list[Step]:
         elif language == "python" and body.startswith("import sandmod"):
             found.append(Step("script", body))
         elif language == "text" and after_bash >= 0 and not text[after_bash:block.start()].strip():
-            found.append(Step("prints", body, last_command(found)))
+            found.append(Step("prints", body, last_command(found), block.span(3)))
         after_bash = block.end() if language == "bash" else -1
     return found
 
@@ -62,22 +63,15 @@ def refreshed(page: str, outputs: dict[str, str]) -> str:
     again from ``outputs`` (a command -> what it printed, as ``test_docs.follow`` returns):
     each shown line becomes the printed line it stands for. Raises ValueError where a block
     shows more than the figures differently from what its command printed."""
-    parts, done, after_bash, found = [], 0, -1, []
-    for block in BLOCK.finditer(page):
-        language, title, body = block.groups()
-        if title:
-            found.append(Step("file", body, title))
-        elif language == "bash":
-            found += [Step("command", line.split(" #")[0].strip()) for line in body.splitlines() if line.split(" #")[0].strip()]
-        elif language == "text" and after_bash >= 0 and not page[after_bash : block.start()].strip():
-            command = last_command(found)
-            if command in outputs:
-                if not prints_what_it_shows(body, outputs[command]):
-                    raise ValueError(f"{command} printed\n{outputs[command]}\nnot\n{body}")
-                shown = body.rstrip("\n").splitlines()
-                printed = outputs[command].strip().splitlines()[-len(shown) :]
-                start = block.start(3)
-                parts += [page[done:start], "\n".join(line.rstrip() for line in printed) + "\n"]
-                done = block.end(3)
-        after_bash = block.end() if language == "bash" else -1
+    parts, done = [], 0
+    for step in steps(page):
+        if step.kind != "prints" or step.path not in outputs:
+            continue
+        printed = outputs[step.path]
+        if not prints_what_it_shows(step.text, printed):
+            raise ValueError(f"{step.path} printed\n{printed}\nnot\n{step.text}")
+        shown = step.text.rstrip("\n").splitlines()
+        lines = printed.strip().splitlines()[-len(shown) :]
+        parts += [page[done : step.span[0]], "\n".join(line.rstrip() for line in lines) + "\n"]
+        done = step.span[1]
     return "".join(parts) + page[done:]
