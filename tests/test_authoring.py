@@ -60,6 +60,8 @@ def test_schema_describes_the_mod_format(tmp_path):
     liquid = schema["$defs"]["LiquidElement"]["properties"]
     assert liquid["viscosity"]["maximum"] if "maximum" in liquid["viscosity"] else liquid["viscosity"]["exclusiveMaximum"] == 1
     assert "dispersion" in schema["$defs"]["LiquidElement"]["required"]
+    (entry,) = schema["properties"]["elements"]["patternProperties"].values()  # an element, or a table checked when loaded
+    assert entry["anyOf"][1]["not"] == {"required": ["archetype"]} and entry["anyOf"][0]["discriminator"]["propertyName"] == "archetype"
     world = json.loads(invoke("schema", "--world").stdout)
     assert "made_with" in world["$defs"]["WorldInfo"]["properties"]
 

@@ -593,6 +593,17 @@ def _check_grid(name: str, rows: list[str], allowed: set[str], width: int, heigh
             raise wrong(f"row {number}: {', '.join(map(repr, unknown))} not in the legend", number)
 
 
+def _patches_too(schema: dict) -> None:
+    """Let editors accept the tables checked only when loaded: patches, and elements made ``like`` another."""
+    for name, element in schema.get("patternProperties", {}).items():
+        schema["patternProperties"][name] = {"anyOf": [element, {
+            "type": "object",
+            "description": "Without an archetype: a patch of another mod's element ('mod:NAME'), or an element made 'like' "
+            "another; its fields are checked when the mods are loaded.",
+            "not": {"required": ["archetype"]},
+        }]}
+
+
 class ModFile(_Strict):
     """A whole mod file."""
 
@@ -600,6 +611,7 @@ class ModFile(_Strict):
     elements: dict[ElementName, Element] = Field(
         default_factory=dict,
         description="The elements this mod defines, by name; 'othermod:NAME' without an archetype changes only the fields it names of another mod's element.",
+        json_schema_extra=_patches_too,
     )
     _patches: dict[str, dict] = PrivateAttr(default_factory=dict)
 
