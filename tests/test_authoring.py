@@ -188,6 +188,77 @@ def test_an_element_like_another_takes_its_fields_and_replaces_those_it_gives(tm
     ]
 
 
+METAL = """
+[mod]
+name = "metal"
+
+[elements.iron]
+archetype = "static"
+color = "#8a8a8a"
+melts = { above = 1538, viscosity = 0.3 }
+
+[elements.brine]
+archetype = "liquid"
+color = "#3060c0"
+density = 1100
+dispersion = 3
+freezes = { below = -10 }
+
+[[tests]]
+name = "hot_iron_melts_flows_and_sets_on_cold_stone"
+frames = 40
+legend = { I = { element = "iron", temperature = 1800 }, "#" = "stone" }
+scene = \"\"\"
+#.....#
+#.III.#
+#.....#
+#.....#
+#######
+\"\"\"
+count = { iron = 3 }
+expect = \"\"\"
+#.....#
+#.....#
+#.....#
+#?????#
+#######
+\"\"\"
+
+[[tests]]
+name = "cold_brine_freezes"
+frames = 5
+legend = { C = { element = "brine", temperature = -40 }, "#" = "stone" }
+scene = \"\"\"
+#CC#
+####
+\"\"\"
+absent = ["brine"]
+present = ["frozen_brine"]
+"""
+
+
+def test_an_element_that_melts_or_freezes_makes_its_form_and_the_changes_between(tmp_path, monkeypatch):
+    from sandmod.world.loading import load_ruleset
+
+    write_mods(tmp_path / "mods", {"metal.toml": METAL})
+    specs = {e.id: e.spec for e in load_ruleset(mod_dirs=[tmp_path / "mods"]).elements}
+    iron, molten = specs["metal:iron"], specs["metal:molten_iron"]
+    assert (iron.heated.above, iron.heated.becomes) == (1538, "metal:molten_iron")
+    assert molten.archetype == "liquid" and (molten.cooled.below, molten.cooled.becomes) == (1538, "metal:iron")
+    assert molten.viscosity == 0.3 and molten.temperature == 1638 and molten.color != iron.color  # given, placed hot, glowing
+    brine, frozen = specs["metal:brine"], specs["metal:frozen_brine"]
+    assert (brine.cooled.becomes, frozen.archetype, frozen.heated.above, frozen.heated.becomes) == ("metal:frozen_brine", "static", -10, "metal:brine")
+    monkeypatch.chdir(tmp_path)
+    result = invoke("test", "metal")
+    assert result.exit_code == 0, result.output
+    assert "metal:molten_iron" in invoke("list").stdout
+    write_mods(tmp_path / "mods", {"metal.toml": METAL.replace("viscosity = 0.3", "viscosity = 3")})  # checked as the form's own
+    bad = invoke("validate", "mods")
+    assert bad.exit_code == 2 and bad.stderr == "mods/metal.toml:7:25: elements.iron.melts.viscosity: must be < 1 (got 3)\n"
+    write_mods(tmp_path / "mods", {"metal.toml": METAL, "hot.toml": '[mod]\nname = "hot"\nrequires = ["metal"]\n[elements."metal:brine"]\nmelts = { above = 90 }\n'})
+    assert invoke("validate", "mods").stderr.startswith("mods/hot.toml:5:1: elements.metal:brine.melts: a patch cannot make forms ('melts')")
+
+
 def test_a_patch_is_checked_as_the_element_it_makes(tmp_path, monkeypatch):
     patch = '[mod]\nname = "heavy"\nrequires = REQUIRES\n[elements."sand:sand"]\ndensity = -5\ndensty = 3\n[elements."water:waterr"]\ndensity = 900\n[elements."water:water"]\nheated = { above = 90 }\n'
     write_mods(tmp_path / "mods", {"heavy.toml": patch.replace("REQUIRES", '["sand", "water"]')})

@@ -171,6 +171,27 @@ class Cooled(_Strict):
     spread: float = Field(0.0, ge=0.0, le=1000.0, description=_SPREAD, examples=[20])
 
 
+class Melts(BaseModel):
+    """The element's molten form, made from it (as Sandboxels' generated forms are): ``molten_NAME``,
+    a liquid with the element's fields that a liquid has, its colours glowing, 100 degrees above the
+    point when placed; the element melts into it above ``above`` and it sets back below. Any element
+    field given here too replaces the one the form would get (``density``, ``color``, ...)."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+    above: Temperature = Field(description="Degrees Celsius; hotter than this, the element melts.", examples=[1538])
+
+
+class Freezes(BaseModel):
+    """The element's frozen form, made from it: ``frozen_NAME``, a static solid with the element's fields
+    that one has, its colours paler, 20 degrees below the point when placed; the element freezes into it
+    below ``below`` and it thaws back above. Any element field given here too replaces the one it would get."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+    below: Temperature = Field(description="Degrees Celsius; colder than this, the element freezes.", examples=[-10])
+
+
 class Flammable(_Strict):
     """How an element catches fire and burns (or, with an ``explosion``, blows up)."""
 
@@ -256,6 +277,8 @@ class _ElementBase(_Strict):
     )
     heated: Heated | None = Field(None, description="What it becomes above a temperature (water boils to steam).")
     cooled: Cooled | None = Field(None, description="What it becomes below a temperature (lava sets into basalt).")
+    melts: Melts | None = Field(None, description="Make its molten form too, and melt into it (instead of 'heated').", examples=[{"above": 1538}])
+    freezes: Freezes | None = Field(None, description="Make its frozen form too, and freeze into it (instead of 'cooled').", examples=[{"below": 0}])
     flammable: Flammable | None = Field(None, description="How it catches fire and burns.")
     explosion: Explosion | None = Field(
         None, description="It explodes instead of burning when lit or hot (needs 'flammable' to say when)."
@@ -274,6 +297,8 @@ class _ElementBase(_Strict):
     def _consistent_heat(self):
         if self.heated is not None and self.cooled is not None and self.cooled.below >= self.heated.above:
             raise ValueError("cooled.below must be colder than heated.above")
+        if (self.melts is not None and self.heated is not None) or (self.freezes is not None and self.cooled is not None):
+            raise ValueError("give 'melts' or 'heated', 'freezes' or 'cooled': not both")
         if self.explosion is not None and self.flammable is None:
             raise ValueError("an explosive element needs 'flammable' (ignites_at, catch_chance) to say when it goes off")
         return self

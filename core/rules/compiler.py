@@ -44,7 +44,7 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     TEMP_ONE,
 )
 from .modset import LoadedMod
-from ..formats.modspec import ELEMENT_REF, EMPTY_ID, PARTICLE_ID, Element, PatchedElement, Reaction
+from ..formats.modspec import ELEMENT_REF, EMPTY_ID, PARTICLE_ID, Cooled, Element, Heated, LiquidElement, PatchedElement, Reaction, StaticElement
 from ..formats.validation import validate_changed
 from ..formats.tomlsource import TomlSource
 
@@ -452,6 +452,7 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem], warnin
                     problems.append(mod.source.problem(loc, f"'{element_id}' is not defined by any loaded mod ({what})"))
                     continue
                 defs[element_id] = _Definition(spec, mod.source, mod.name, loc)
+                _make_family(defs, element_id, mod, problems)
             elif not spec.override:
                 problems.append(
                     mod.source.problem(
@@ -463,6 +464,7 @@ def _collect_elements(mods: Sequence[LoadedMod], problems: list[Problem], warnin
                 defs[element_id] = _Definition(
                     spec, mod.source, mod.name, loc, previous.replaced + [previous.mod], previous.history + [change]
                 )
+                _make_family(defs, element_id, mod, problems)
         for key, fields in mod.spec.patches.items():
             if "like" in fields:
                 _derive(defs, key, fields, mod, {m.name: m for m in mods}, problems)
@@ -494,6 +496,55 @@ def _derive(defs: dict[str, _Definition], key: str, fields: dict, mod: LoadedMod
         problems.extend(mistakes.problems)
         return
     defs[element_id] = _Definition(spec, mod.source, mod.name, loc)
+    _make_family(defs, element_id, mod, problems)
+
+
+#: The forms an element may make of itself: its field, the form's name prefix and archetype, which way
+#: the element changes into it (its own field, the point's name), the colour its colours lean to, and
+#: how far from the point the form is placed.
+FAMILY = (
+    ("melts", "molten_", "liquid", "heated", "above", "#ff6a1a", 100.0),
+    ("freezes", "frozen_", "static", "cooled", "below", "#d8ecff", -20.0),
+)
+FORM_DENSITY, FORM_DISPERSION = 2500.0, 1  # a molten form's, where the element has no density of its own
+_ARCHETYPE_MODELS = {"liquid": LiquidElement, "static": StaticElement}
+
+
+def _make_family(defs: dict[str, _Definition], element_id: str, mod: LoadedMod, problems: list[Problem]) -> None:
+    """Make the forms that an element's ``melts`` and ``freezes`` ask for, and the changes between them."""
+    d = defs[element_id]
+    for field_name, prefix, archetype, change, point, tint, offset in FAMILY:
+        family = getattr(d.spec, field_name, None)
+        if family is None:
+            continue
+        at = getattr(family, point)
+        given = dict(family.model_extra or {})
+        form_id = f"{mod.name}:{prefix}{element_id.split(':', 1)[1]}"
+        loc = d.loc + (field_name,)
+        if form_id in defs:
+            problems.append(mod.source.problem(loc, f"its form '{form_id}' is defined already"))
+            continue
+        own = d.spec.model_dump(mode="json", exclude={"override", "like", "melts", "freezes", "heated", "cooled"}, exclude_none=True)
+        form = {name: value for name, value in own.items() if name in _ARCHETYPE_MODELS[archetype].model_fields}
+        form.update(archetype=archetype, color=[_lean(c, tint) for c in d.spec.color], temperature=at + offset)
+        if archetype == "liquid":
+            form.update(density=0.9 * own.get("density", FORM_DENSITY / 0.9), dispersion=FORM_DISPERSION)
+        back, back_point = ("cooled", "below") if change == "heated" else ("heated", "above")
+        form[back] = {back_point: at, "becomes": element_id}
+        try:
+            spec = validate_changed(PatchedElement, {**form, **given}, mod.source, loc, set(given)).element
+        except ProblemsError as mistakes:
+            problems.extend(mistakes.problems)
+            continue
+        defs[form_id] = _Definition(spec, mod.source, mod.name, loc)
+        into = (Heated if change == "heated" else Cooled)(**{point: at, "becomes": form_id})
+        d.spec = d.spec.model_copy(update={change: into})
+
+
+def _lean(color: str, toward: str, share: float = 0.5) -> str:
+    """``color`` (#rrggbb) moved ``share`` of the way to ``toward``."""
+    a, b = bytes.fromhex(color[1:]), bytes.fromhex(toward[1:])
+    return "#" + bytes(round(x + (y - x) * share) for x, y in zip(a, b)).hex()
 
 
 def _required_below(mods: Sequence[LoadedMod]) -> dict[str, set[str]]:
@@ -543,6 +594,11 @@ def _patch(defs: dict[str, _Definition], element_id: str, fields: dict, mod: Loa
                                            f"a mod that changes another's element names it in requires, to load after it)"))
         return
     given = {name: value for name, value in fields.items() if name != "override"}
+    for family in ("melts", "freezes"):
+        if family in given:
+            problems.append(mod.source.problem(loc + (family,), f"a patch cannot make forms ('{family}'): override the element, "
+                                               "or give it a 'heated' or 'cooled' into an element of your own"))
+            return
     merged = {**previous.spec.model_dump(mode="json", exclude={"override"}, exclude_none=True), **given}
     try:
         spec = validate_changed(PatchedElement, merged, mod.source, loc, set(given)).element
