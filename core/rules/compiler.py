@@ -500,10 +500,10 @@ def _derive(defs: dict[str, _Definition], key: str, fields: dict, mod: LoadedMod
 
 
 #: The forms an element may make of itself: its field, the form's name prefix and archetype, which way
-#: the element changes into it (its own field, the point's name), the colour its colours lean to, and
-#: how far from the point the form is placed.
+#: the element changes into it (its own field, the point's name), the colour its colours lean to (none:
+#: they glow as the element's would at the point), and how far from the point the form is placed.
 FAMILY = (
-    ("melts", "molten_", "liquid", "heated", "above", "#ff6a1a", 100.0),
+    ("melts", "molten_", "liquid", "heated", "above", None, 100.0),
     ("freezes", "frozen_", "static", "cooled", "below", "#d8ecff", -20.0),
 )
 FORM_DENSITY, FORM_DISPERSION = 2500.0, 1  # a molten form's, where the element has no density of its own
@@ -526,7 +526,8 @@ def _make_family(defs: dict[str, _Definition], element_id: str, mod: LoadedMod, 
             continue
         own = d.spec.model_dump(mode="json", exclude={"override", "like", "melts", "freezes", "heated", "cooled"}, exclude_none=True)
         form = {name: value for name, value in own.items() if name in _ARCHETYPE_MODELS[archetype].model_fields}
-        form.update(archetype=archetype, color=[_lean(c, tint) for c in d.spec.color], temperature=at + offset)
+        colors = [_lean(c, tint) if tint else _glowing(c, at) for c in d.spec.color]
+        form.update(archetype=archetype, color=colors, temperature=at + offset)
         if archetype == "liquid":
             form.update(density=0.9 * own.get("density", FORM_DENSITY / 0.9), dispersion=FORM_DISPERSION)
         back, back_point = ("cooled", "below") if change == "heated" else ("heated", "above")
@@ -545,6 +546,15 @@ def _lean(color: str, toward: str, share: float = 0.5) -> str:
     """``color`` (#rrggbb) moved ``share`` of the way to ``toward``."""
     a, b = bytes.fromhex(color[1:]), bytes.fromhex(toward[1:])
     return "#" + bytes(round(x + (y - x) * share) for x, y in zip(a, b)).hex()
+
+
+def _glowing(color: str, celsius: float) -> str:
+    """``color`` as a cell of it looks at ``celsius`` (see :data:`GLOW_FROM`): a molten form looks as
+    hot as its element does where it melts, not duller (it glows only when hotter than it is placed)."""
+    if celsius < GLOW_FROM:
+        return color
+    level = min(len(GLOW_COLOURS) - 1, int((celsius - GLOW_FROM) // GLOW_STEP))
+    return _lean(color, "#" + bytes(GLOW_COLOURS[level]).hex(), GLOW_MIX[level])
 
 
 def _required_below(mods: Sequence[LoadedMod]) -> dict[str, set[str]]:
