@@ -89,8 +89,8 @@ def test_validate_reports_every_file_in_one_pass(tmp_path, monkeypatch):
         "mods/a.toml:5:1: elements.x.color: must be a colour like '#c2b280' (got '#12345')",
         "mods/b.toml:3:1: mod.requires.0: requires mod 'a', which has mistakes",
         "mods/c.toml:6:26: elements.z.lifetime.becomes: unknown element 'snad' (did you mean 'sand'?)",
-        "mods/d.toml:17:1: reactions.0: these reactions never settle: tac + tic -> tic + tac; touching cells would "
-        "change forever (give one of them a temperature range, or end the chain)",
+        "mods/d.toml:17:1: reactions.0: these reactions never settle: tac + tic -> tic + tac; touching cells that cannot move would "
+        "change forever (give one of them a temperature range, a lifetime to an element in it, or end the chain)",
         "mods/d.toml:12:12: elements.yin.heated.above: yin turns into yang above 50 degrees, but yang turns back below 60: "
         "between the two it would change every frame; make yang's cooled.below at most 50",
     ]

@@ -246,6 +246,70 @@ def test_a_higher_priority_or_a_requirement_decides_a_tie_without_a_warning(regi
     assert not [w for w in ruleset.warnings if "voids:void + viruses:virus" in str(w)]
 
 
+SWAPS = """
+[mod]
+name = "swaps"
+requires = ["water"]
+
+[elements.tic]
+archetype = "static"
+color = "#ff0000"
+TIC
+
+[elements.tac]
+archetype = "static"
+color = "#00ff00"
+
+[elements.sponge]
+archetype = "static"
+color = "#e0d060"
+
+[elements.wet_sponge]
+archetype = "static"
+color = "#a09040"
+
+[[reactions]]
+a = "tic"
+b = "tac"
+a_becomes = "tac"
+b_becomes = "tic"
+chance = 0.5
+RANGE
+
+[[reactions]]
+a = "sponge"
+b = "water"
+a_becomes = "wet_sponge"
+b_becomes = "empty"
+chance = 0.5
+
+[[reactions]]
+a = "wet_sponge"
+b = "empty"
+a_becomes = "sponge"
+b_becomes = "water"
+chance = 0.1
+"""
+
+
+@pytest.mark.parametrize(
+    "tic, range_, settles",
+    [
+        ("", "", False),  # two static cells swapping forever
+        ("", "min_temperature = -273", False),  # a range that holds every temperature is none
+        ("", "min_temperature = 50", True),  # a real range: it ends below 50 degrees
+        ('lifetime = { frames = 30, becomes = "tac" }', "", True),  # tic changes by itself
+    ],
+)
+def test_only_chains_of_cells_that_can_never_part_are_endless(registry, tmp_path, tic, range_, settles):
+    """The sponge's wet/dry chain passes in every case: water moves away."""
+    files = {"swaps.toml": SWAPS.replace("TIC", tic).replace("RANGE", range_)}
+    if settles:
+        load_ruleset(None, [write_mods(tmp_path / "mods", files)], registry)
+    else:
+        assert [p.split(": ", 2)[2][:40] for p in problems_of(registry, tmp_path, files)] == ["these reactions never settle: tac + tic "]
+
+
 def test_unknown_element_suggests_a_name(registry, tmp_path):
     problems = problems_of(
         registry,

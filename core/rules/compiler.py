@@ -40,6 +40,8 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     FLAMMABLE,
     HEATED,
     IGNITES,
+    MAX_TEMPERATURE,
+    MIN_TEMPERATURE,
     SUBCELL,
     TEMP_ONE,
 )
@@ -798,11 +800,19 @@ def element_masks(pairs: np.ndarray) -> np.ndarray:
 
 
 def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Problem]:
-    """Touching pairs that react into a pair that reacts back, at any temperature: they never settle."""
+    """Touching pairs that react into a pair that reacts back, and so on round, at any temperature,
+    with cells that can never part: they change forever. A chain is left alone where a cell in it can
+    move away (any archetype but static) or changes by itself (a lifetime), or where a reaction in
+    it happens only in a range of temperatures narrower than every temperature there is."""
+    every = (2 * temperature_units(MIN_TEMPERATURE), 2 * temperature_units(MAX_TEMPERATURE))
+
+    def stuck(e: int) -> bool:
+        return elements[e].spec.archetype == "static" and elements[e].spec.lifetime is None
+
     always = {
         pair: (first, second)
         for pair, (_, _, _, (first, second, _, low, high, _)) in winner.items()
-        if low == -(2**31) and high == 2**31 - 1 and (first, second) != pair
+        if low <= every[0] and high >= every[1] and (first, second) != pair and all(stuck(e) for e in (*pair, first, second))
     }
     problems: list[Problem] = []
     reported: set = set()
@@ -819,8 +829,8 @@ def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Pr
             problems.append(
                 mod.source.problem(
                     ("reactions", number),
-                    f"these reactions never settle: {steps}; touching cells would change forever "
-                    "(give one of them a temperature range, or end the chain)",
+                    f"these reactions never settle: {steps}; touching cells that cannot move would change forever "
+                    "(give one of them a temperature range, a lifetime to an element in it, or end the chain)",
                 )
             )
     return problems
