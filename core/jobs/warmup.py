@@ -139,7 +139,6 @@ def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[],
     waiting = list(PARTS)
     running: dict[subprocess.Popen, str] = {}
     finished: set[str] = set()
-    done = 0
     most = max(1, min(os.cpu_count() or 1, len(PARTS)))
     env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
     try:
@@ -152,8 +151,7 @@ def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[],
             time.sleep(0.05)
             for process in [p for p in running if p.poll() is not None]:
                 finished.add(running.pop(process))
-                done += 1
-                progress(done)
+                progress(len(finished))
                 if finished >= set(STEP_NEEDS) and once_stepped is not None:
                     once_stepped()
                     once_stepped = None

@@ -43,6 +43,8 @@ def _differences(before: Element, after: Element) -> tuple[tuple[str, object, ob
 
 @dataclass
 class Definition:
+    """An element's definition in force: its fields, where they were written, and who changed what."""
+
     spec: Element
     source: TomlSource
     mod: str
@@ -54,7 +56,7 @@ class Definition:
 
 def collect_definitions(mods: Sequence[LoadedMod], problems: list[Problem], warnings: list[Problem]) -> dict[str, Definition]:
     defs: dict[str, Definition] = {}
-    below = required_below(mods)
+    below, by_name = required_below(mods), {m.name: m for m in mods}
     for mod in mods:
         for key, spec in mod.spec.elements.items():
             loc = ("elements", key)
@@ -82,10 +84,9 @@ def collect_definitions(mods: Sequence[LoadedMod], problems: list[Problem], warn
                 _make_family(defs, element_id, mod, problems)
         for key, fields in mod.spec.patches.items():
             if "like" in fields:
-                _derive(defs, key, fields, mod, {m.name: m for m in mods}, problems)
+                _derive(defs, key, fields, mod, by_name, problems)
             else:
-                _patch(defs, key, fields, mod, problems)
-                _warn_of_rival_patches(defs.get(key), key, fields, mod, below, warnings)
+                _patch(defs, key, fields, mod, below, problems, warnings)
     return defs
 
 
@@ -94,7 +95,7 @@ def _derive(defs: dict[str, Definition], key: str, fields: dict, mod: LoadedMod,
     loc = ("elements", key)
     element_id = key if ":" in key else f"{mod.name}:{key}"
     like = fields["like"]
-    base_id, message = resolve_name(like, mod.name, dict.fromkeys(defs, 0), mod.requires) if isinstance(like, str) else (None, "must be an element name")
+    base_id, message = resolve_name(like, mod.name, defs, mod.requires) if isinstance(like, str) else (None, "must be an element name")
     if element_id.split(":", 1)[0] != mod.name or element_id in defs:
         problems.append(mod.source.problem(loc, f"'{element_id}' is not a new element of {mod.name}: 'like' makes a new one (a patch changes one)"))
         return
@@ -104,7 +105,7 @@ def _derive(defs: dict[str, Definition], key: str, fields: dict, mod: LoadedMod,
     given = {name: value for name, value in fields.items() if name != "like"}
     base = defs[base_id]  # its names (glass, for sand's heated.becomes) as its own mod reads them
     taken = _qualified(base.spec.model_dump(mode="json", exclude={"override", "like"}, exclude_none=True), type(base.spec),
-                       lambda ref: resolve_name(ref, base.mod, dict.fromkeys(defs, 0), by_name[base.mod].requires)[0] or ref)
+                       lambda ref: resolve_name(ref, base.mod, defs, by_name[base.mod].requires)[0] or ref)
     try:
         spec = validate_changed(PatchedElement, {**taken, **given, "like": base_id}, mod.source, loc, set(fields)).element
     except ProblemsError as mistakes:
@@ -165,22 +166,6 @@ def required_below(mods: Sequence[LoadedMod]) -> dict[str, set[str]]:
     return below
 
 
-def _warn_of_rival_patches(d: "Definition | None", element_id: str, fields: dict, mod: LoadedMod, below: dict[str, set[str]], warnings: list[Problem]) -> None:
-    """Note the fields ``mod``'s patch sets that a patch of a mod it does not require (nor that
-    requires it) set before: its value wins by load order alone. Then note its own."""
-    if d is None or not d.history or d.history[-1].mod != mod.name:
-        return  # the patch was not applied
-    mine = d.history[-1]
-    for name in fields:
-        if name == "override":
-            continue
-        earlier = d.patched.get(name)
-        if earlier is not None and earlier.mod not in below[mod.name] and mod.name not in below.get(earlier.mod, set()):
-            warnings.append(mod.source.problem(("elements", element_id, name), f"also patched by {earlier.mod} ({earlier.file}:{earlier.line}), "
-                                               f"which {mod.name} does not require: {mod.name}'s value is kept, by load order alone"))
-        d.patched[name] = mine
-
-
 def _qualified(data: dict, model: type[BaseModel], qualify) -> dict:
     """``data`` (``model`` dumped) with each element name in it, nested tables' too, as ``qualify`` gives it."""
     out = dict(data)
@@ -194,9 +179,13 @@ def _qualified(data: dict, model: type[BaseModel], qualify) -> dict:
     return out
 
 
-def _patch(defs: dict[str, Definition], element_id: str, fields: dict, mod: LoadedMod, problems: list[Problem]) -> None:
+def _patch(
+    defs: dict[str, Definition], element_id: str, fields: dict, mod: LoadedMod, below: dict[str, set[str]], problems: list[Problem], warnings: list[Problem]
+) -> None:
     """Apply a mod's patch of another mod's element (a table of the fields it changes): the
-    element keeps its other fields; the result is checked as a whole element would be."""
+    element keeps its other fields; the result is checked as a whole element would be. A field
+    that a mod it does not require (nor that requires it) patched before is a warning: its
+    value wins by load order alone."""
     loc = ("elements", element_id)
     previous = defs.get(element_id)
     if previous is None:
@@ -216,12 +205,19 @@ def _patch(defs: dict[str, Definition], element_id: str, fields: dict, mod: Load
         problems.extend(mistakes.problems)
         return
     change = Override(mod.name, mod.source.name, mod.source.line_of(loc), _differences(previous.spec, spec), patch=True)
+    patched = dict(previous.patched)
+    for name in given:
+        earlier = patched.get(name)
+        if earlier is not None and earlier.mod not in below[mod.name] and mod.name not in below.get(earlier.mod, set()):
+            warnings.append(mod.source.problem(loc + (name,), f"also patched by {earlier.mod} ({earlier.file}:{earlier.line}), "
+                                               f"which {mod.name} does not require: {mod.name}'s value is kept, by load order alone"))
+        patched[name] = change
     # still the element its mod defined (its names resolve as that mod's), changed: the change is in its history
-    defs[element_id] = Definition(spec, previous.source, previous.mod, previous.loc, previous.replaced, previous.history + [change], dict(previous.patched))
+    defs[element_id] = Definition(spec, previous.source, previous.mod, previous.loc, previous.replaced, previous.history + [change], patched)
 
 
-def resolve_name(ref: str, mod: str | None, ids: dict[str, int], requires: Sequence[str] = ()) -> tuple[str | None, str]:
-    """Resolve an element reference; returns (id, "") or (None, message).
+def resolve_name(ref: str, mod: str | None, ids: typing.Collection[str], requires: Sequence[str] = ()) -> tuple[str | None, str]:
+    """Resolve an element reference among the ids ``ids`` holds; returns (id, "") or (None, message).
 
     A bare name means the element of that name in ``mod`` itself, else in the
     mods it requires (one of them), else in any loaded mod (one of them).
