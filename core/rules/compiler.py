@@ -177,6 +177,11 @@ class Ruleset:
         """How many colours each element's cells pick from (a cell keeps its pick as it moves)."""
         return self.looks.shades
 
+    def swatch(self, element: int) -> tuple[int, int, int]:
+        """The RGB colour that stands for ``element`` (its first shade), for menus and swatches."""
+        start = 3 * int(self.looks.normal[element, 0])
+        return tuple(self.palette[start : start + 3])
+
     def index(self, ref: str, within: str | None = None, near: Sequence[str] = ()) -> int:
         """The numeric id of ``ref`` ('sand' or 'sand:sand'); KeyError with a message if unknown.
 

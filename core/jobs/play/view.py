@@ -230,9 +230,8 @@ class View:
     def _bar(self, overlay: Overlay) -> None:
         pygame, top = self.pg, self.area[1]
         pygame.draw.rect(self.screen, PANEL, (0, top, self.size[0], BAR + STATUS))
-        looks = self.world.ruleset.looks
         for left, width, element in self.bar_slots(overlay.bar):
-            colour = tuple(int(c) for c in self.palette[looks.normal[element, 0]])
+            colour = self.world.ruleset.swatch(element)
             pygame.draw.rect(self.screen, colour, (left + 1, top + 3, width - 2, BAR - 6))
             if element == overlay.chosen or element in overlay.matches:
                 pygame.draw.rect(self.screen, (255, 255, 255), (left, top + 1, width, BAR - 2), 2)
