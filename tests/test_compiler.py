@@ -7,6 +7,7 @@ import pytest
 
 from conftest import write_mods
 from sandmod.rules.compiler import (
+    pair_reaction,
     ARCHETYPE_CODES,
     BLAST_RADIUS,
     CAP_ONE,
@@ -82,7 +83,7 @@ def test_density_decides_who_displaces_whom(ruleset):
     assert not d[i("stone")].any()
 
 
-@pytest.mark.parametrize("matrix, masks", [("displace", "displaces"), ("react_chance", "reactive")])
+@pytest.mark.parametrize("matrix, masks", [("displace", "displaces"), ("react_pair", "reactive")])
 def test_neighbour_masks_never_miss_a_partner(ruleset, matrix, masks):
     pairs, bits = getattr(ruleset.tables, matrix), getattr(ruleset.tables, masks).view(np.uint64)
     assert pairs.any()
@@ -95,9 +96,22 @@ def test_neighbour_masks_never_miss_a_partner(ruleset, matrix, masks):
 def test_reactions_fill_the_matrix_both_ways(ruleset):
     t, i = ruleset.tables, ruleset.index
     fire, water = i("fire"), i("water")
-    assert t.react_chance[fire, water] == t.react_chance[water, fire] == round(0.8 * ROLL_ONE)
-    assert (t.react_into_a[fire, water], t.react_into_b[fire, water]) == (i("steam"), water)
-    assert (t.react_into_a[water, fire], t.react_into_b[water, fire]) == (water, i("steam"))
+    forward, backward = pair_reaction(t, fire, water), pair_reaction(t, water, fire)
+    assert forward.chance == backward.chance == round(0.8 * ROLL_ONE)
+    assert (forward.into_a, forward.into_b) == (i("steam"), water)
+    assert (backward.into_a, backward.into_b) == (water, i("steam"))
+    assert t.react_pair[fire, water] != t.react_pair[water, fire]  # a row for each side: it reads a then b
+
+
+def test_a_reaction_is_one_row_whatever_its_selectors_match(ruleset):
+    """A broad selector makes one row a side (products that stay are STAYS), not a row a pair: the
+    row tables are sized by the reactions, the pair table by the elements."""
+    t, i = ruleset.tables, ruleset.index
+    acid = i("acid")
+    victims = [b for b in range(len(ruleset.elements)) if pair_reaction(t, acid, b) and pair_reaction(t, acid, b).into_a == 0]
+    assert len(victims) > 5 and len({int(t.react_pair[acid, b]) for b in victims}) == 1
+    assert len(t.react_chance) <= 1 + 2 * sum(len(m.spec.reactions) for m in ruleset.mods)
+    assert t.react_chance[0] == 0 and t.react_pair.dtype == np.uint16
 
 
 def test_reaction_temperatures_and_heat_fill_the_matrix(registry, tmp_path):
@@ -124,24 +138,22 @@ def test_reaction_temperatures_and_heat_fill_the_matrix(registry, tmp_path):
     rs = load_ruleset(["r"], [mods], registry=registry)
     t, a, stone = rs.tables, rs.index("a"), rs.index("stone")
     for pair in ((a, stone), (stone, a)):
-        assert (t.react_tsum_min[pair], t.react_tsum_max[pair]) == (200 * TEMP_ONE, 401 * TEMP_ONE)  # of T_a + T_b
-        assert t.react_heat[pair] == -30 * TEMP_ONE
+        reaction = pair_reaction(t, *pair)
+        assert (reaction.tsum_min, reaction.tsum_max) == (200 * TEMP_ONE, 401 * TEMP_ONE)  # of T_a + T_b
+        assert reaction.heat == -30 * TEMP_ONE
 
 
 def test_tag_selectors_spare_acid_proof_elements(ruleset):
     t, i = ruleset.tables, ruleset.index
     acid = i("acid")
-    assert t.react_chance[acid, i("titanium")] == 0 and t.react_chance[acid, acid] == 0
-    assert t.react_chance[acid, i("empty")] == 0
+    assert pair_reaction(t, acid, i("titanium")) is pair_reaction(t, acid, acid) is pair_reaction(t, acid, 0) is None
     for victim in ("stone", "sand", "lava", "steam"):
-        assert t.react_chance[acid, i(victim)] == round(0.2 * ROLL_ONE)
-        assert (t.react_into_a[acid, i(victim)], t.react_into_b[acid, i(victim)]) == (0, 0)
+        assert pair_reaction(t, acid, i(victim))[:3] == (round(0.2 * ROLL_ONE), 0, 0)
 
 
 def test_a_more_specific_reaction_wins(ruleset):
     t, i = ruleset.tables, ruleset.index
-    assert t.react_chance[i("acid"), i("water")] == round(0.003 * ROLL_ONE)
-    assert (t.react_into_a[i("acid"), i("water")], t.react_into_b[i("acid"), i("water")]) == (i("water"), i("water"))
+    assert pair_reaction(t, i("acid"), i("water"))[:3] == (round(0.003 * ROLL_ONE), i("water"), i("water"))
 
 
 def test_reactions_of_equal_rank_that_disagree_are_an_error(registry, tmp_path):
@@ -221,7 +233,8 @@ def _void_and_virus(registry, tmp_path, requires="", priority=""):
     viruses = write_mods(tmp_path / "viruses", {"viruses.toml": VIRUSES})
     ruleset = load_ruleset(None, [voids, viruses], registry)
     void, virus = ruleset.index("voids:void"), ruleset.index("viruses:virus")
-    outcome = (ruleset.elements[ruleset.tables.react_into_a[void, virus]].id, ruleset.elements[ruleset.tables.react_into_b[void, virus]].id)
+    reaction = pair_reaction(ruleset.tables, void, virus)
+    outcome = (ruleset.elements[reaction.into_a].id, ruleset.elements[reaction.into_b].id)
     return ruleset, outcome
 
 

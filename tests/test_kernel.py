@@ -68,7 +68,7 @@ def test_lava_on_water_boils_it_and_sets_into_basalt(ruleset):
     counts = world.counts()
     assert counts.get("lava:lava", 0) == 0 and counts["base:stone"] == 14 and counts["lava:basalt"] == 3
     assert counts.get("water:steam", 0) >= 1  # heat alone: lava and water have no reaction
-    assert not world.ruleset.tables.react_chance[world.ruleset.index("lava"), world.ruleset.index("water")]
+    assert not world.ruleset.tables.react_pair[world.ruleset.index("lava"), world.ruleset.index("water")]
 
 
 def test_acid_eats_stone_and_is_used_up(ruleset):

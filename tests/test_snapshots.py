@@ -62,8 +62,8 @@ def test_elements_are_mapped_by_name_across_other_mods(tmp_path):
         load_snapshot(no_water, tmp_path / "s.npz")
 
 
-def test_a_snapshot_with_a_wider_carry_array_still_loads(tmp_path):
-    """Snapshots written before ``carry`` became uint8 held it as uint16; their flying cargo lands the same."""
+def test_a_snapshot_with_a_narrower_carry_array_still_loads(tmp_path):
+    """Snapshots written while ``carry`` was uint8 (at most 256 elements) load into today's uint16; their flying cargo lands the same."""
     ruleset = load_ruleset(["sand"])
     world = World(ruleset, 16, 16, seed=5)
     ys, xs = np.full(4, 2), np.arange(4, 8)
@@ -72,11 +72,11 @@ def test_a_snapshot_with_a_wider_carry_array_still_loads(tmp_path):
     save_snapshot(world, tmp_path / "now.npz")
     with np.load(tmp_path / "now.npz") as data:
         arrays = {key: data[key] for key in data.files}
-    arrays["carry"] = arrays["carry"].astype(np.uint16)
+    arrays["carry"] = arrays["carry"].astype(np.uint8)
     np.savez_compressed(tmp_path / "old.npz", **arrays)
     old = World(ruleset, 16, 16)
     assert load_snapshot(old, tmp_path / "old.npz") == []
-    assert old.state.carry.dtype == np.uint8 and (old.state.carry == world.state.carry).all()
+    assert old.state.carry.dtype == np.uint16 and (old.state.carry == world.state.carry).all()
     for _ in range(30):
         world.step()
         old.step()

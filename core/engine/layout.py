@@ -32,6 +32,10 @@ BLAST_COLUMNS = 10
 HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
 #: Tables.displace: the chance of an exchange in 1/255ths; ALWAYS needs no roll.
 ALWAYS = 255
+#: Tables.react_into_a/b: the cell stays the element it is (a reaction row serves every pair it matches).
+STAYS = 0xFFFF
+#: Most elements loaded at once: ids and what a particle carries are uint16, below STAYS.
+MAX_ELEMENTS = 4096
 
 # Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame;
 # the others travel with the cell and are dropped when it turns into another element.

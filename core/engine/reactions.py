@@ -9,7 +9,7 @@ import numpy as np
 
 from .cells import FRESH, MOVED, _at, _bit, _cell_key, _inside, _mix32, _temperature, become
 from .jit import inlined
-from .layout import BURNING, REACTED
+from .layout import BURNING, REACTED, STAYS
 
 
 @inlined
@@ -64,21 +64,22 @@ def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
         if not _inside(nx, ny, width, height) or (flags[_at(ny, nx)] & REACTED) != 0:
             continue
         b = cells[_at(ny, nx)]
-        threshold = t.react_chance[e, b]
-        if threshold == 0:
+        row = t.react_pair[e, b]
+        if row == 0:
             continue
+        threshold = t.react_chance[row]
         # One roll per touching pair and frame, the same whichever cell looks.
         roll = _mix32(react_key ^ ((min(y, ny) << 16) | min(x, nx)) ^ ((d & 1) << 31)) >> 8
         ta = _temperature(int(heat[_at(y, x)]), t.heat_recip[e])
         tb = _temperature(int(heat[_at(ny, nx)]), t.heat_recip[b])
-        if ta + tb < t.react_tsum_min[e, b] or ta + tb > t.react_tsum_max[e, b]:
+        if ta + tb < t.react_tsum_min[row] or ta + tb > t.react_tsum_max[row]:
             continue
         busy = True  # it reacts now, or may on a later frame
         if roll >= threshold:
             continue
-        into_a = t.react_into_a[e, b]
-        into_b = t.react_into_b[e, b]
-        warm = t.react_heat[e, b]
+        into_a = e if t.react_into_a[row] == STAYS else t.react_into_a[row]
+        into_b = b if t.react_into_b[row] == STAYS else t.react_into_b[row]
+        warm = t.react_heat[row]
         if into_a != e:
             born |= become(s, t, x, y, into_a, ta + warm, (flags[_at(y, x)] & FRESH) | MOVED, _cell_key(spawn_key, x, y))
             stir = True

@@ -2,10 +2,11 @@
 
 Element ids are ``mod:element``. Numeric ids are given here, in a fixed order
 (``base:empty`` is 0, then the ids sorted), and never written into files.
-Reactions become an n x n interaction matrix (what each cell of a touching
-pair becomes, and the chance per frame); densities and archetypes become a
-displacement matrix (which element may trade places with which, and how
-eagerly).
+Reactions become rows (what each cell of a touching pair becomes, and the
+chance per frame) and an n x n table of which row each pair reads (2 bytes a
+pair); densities and archetypes become a displacement matrix (which element
+may trade places with which, and how eagerly; 1 byte a pair). At the most
+elements, 4,096, the two take 48 MB; at 500, under a megabyte.
 """
 
 from __future__ import annotations
@@ -37,8 +38,10 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     FLAMMABLE,
     HEATED,
     IGNITES,
+    MAX_ELEMENTS,
     MAX_TEMPERATURE,
     MIN_TEMPERATURE,
+    STAYS,
     SUBCELL,
     TEMP_ONE,
 )
@@ -48,8 +51,6 @@ from .modset import LoadedMod
 from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
 from ..formats.tomlsource import TomlSource
 
-#: Most elements a ruleset may hold (palette renders use 256 colours).
-MAX_ELEMENTS = 256
 _NO_LIMIT = 2**62
 
 
@@ -73,12 +74,13 @@ class Tables(NamedTuple):
     reactive: np.ndarray  # int64[n]: partner mask: bit b % 64 set when the element reacts with some b (0: none)
     displace: np.ndarray  # uint8[n, n]: chance (of ALWAYS) that a moving cell of a trades places with a cell of b; 0: never
     displaces: np.ndarray  # int64[n]: mask: bit b % 64 set when a may swap with some b (a first test, like reactive)
-    react_chance: np.ndarray  # uint32[n, n]: roll threshold per frame of contact
-    react_into_a: np.ndarray  # uint16[n, n]: what a becomes
-    react_into_b: np.ndarray  # uint16[n, n]: what b becomes
-    react_tsum_min: np.ndarray  # int32[n, n]: lowest T_a + T_b (TEMP_ONE units) at which the pair reacts
-    react_tsum_max: np.ndarray  # int32[n, n]: highest T_a + T_b
-    react_heat: np.ndarray  # int32[n, n]: temperature added to a cell that changes, TEMP_ONE units
+    react_pair: np.ndarray  # uint16[n, n]: the reaction (a row of the react_ tables) of a cell of a touching one of b; 0: none
+    react_chance: np.ndarray  # uint32[r]: roll threshold per frame of contact (row 0, no reaction: 0)
+    react_into_a: np.ndarray  # uint16[r]: what a becomes; STAYS: it stays as it is
+    react_into_b: np.ndarray  # uint16[r]: what b becomes; STAYS: it stays as it is
+    react_tsum_min: np.ndarray  # int32[r]: lowest T_a + T_b (TEMP_ONE units) at which the pair reacts
+    react_tsum_max: np.ndarray  # int32[r]: highest T_a + T_b
+    react_heat: np.ndarray  # int32[r]: temperature added to a cell that changes, TEMP_ONE units
     # Heat. A cell stores its heat energy, capacity x temperature.
     heat_cap: np.ndarray  # int64[n]: heat capacity, CAP_ONE units
     heat_recip: np.ndarray  # int64[n]: 2**32 / heat_cap, so that temperature = (energy * recip) >> 32
@@ -252,7 +254,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
             elif what is not None:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
-    reactions = _compile_reactions(mods, elements, t, resolve, problems, warnings, below)
+    reactions, t = _compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
@@ -371,16 +373,15 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
             t.fall_dir[e.index] = 1
         elif kind == "gas":
             t.fall_dir[e.index] = -1
-    fluid = np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("liquid", "gas")])
+    fluids = np.flatnonzero(np.isin(t.archetype, [ARCHETYPE_CODES[a] for a in ("liquid", "gas")]))
+    powders = np.flatnonzero(t.archetype == ARCHETYPE_CODES["powder"])
     for a in range(1, len(elements)):
         if t.fall_dir[a] != 0:
-            for b in np.flatnonzero(fluid):
-                if b != a:
-                    t.displace[a, b] = exchange_chance(densities[a], densities[b], int(t.fall_dir[a]))
+            t.displace[a, fluids] = exchange_chance(densities[a], densities[fluids], int(t.fall_dir[a]))
+            t.displace[a, a] = 0
             if t.archetype[a] == ARCHETYPE_CODES["liquid"]:
-                for b in np.flatnonzero(t.archetype == ARCHETYPE_CODES["powder"]):
-                    chance = exchange_chance(densities[a], densities[b], 1) / (1.0 + t.friction[b] / 256)
-                    t.displace[a, b] = max(1, round(chance)) if chance > 0 else 0
+                seep = exchange_chance(densities[a], densities[powders], 1) / (1.0 + t.friction[powders] / 256)
+                t.displace[a, powders] = np.where(seep > 0, np.maximum(1, np.round(seep)), 0)
             gas = t.archetype[a] == ARCHETYPE_CODES["gas"]
             t.displace[a, 0] = exchange_chance(densities[a], air, int(t.fall_dir[a]), INTO_AIR) if gas else ALWAYS
     t.displaces[:] = element_masks(t.displace)
@@ -396,18 +397,21 @@ SURE_ENOUGH = 240
 INTO_AIR = (1.5, ALWAYS)
 
 
-def exchange_chance(mover: float, other: float, fall_dir: int, eagerness: tuple[float, int] = (EAGERNESS, SURE_ENOUGH)) -> int:
+def exchange_chance(mover: float, other, fall_dir: int, eagerness: tuple[float, int] = (EAGERNESS, SURE_ENOUGH)):
     """The chance (of ALWAYS) that a mover of density ``mover`` falling (+1) or rising (-1)
-    trades places with a fluid of density ``other`` in a frame, rolled once per plume block
+    trades places with a fluid of density ``other`` (or each of an array of them) in a frame, rolled once per plume block
     (see :data:`sandmod.engine.layout.PLUME`): ``eagerness`` (a factor and a most) times the
     gap's share of the larger density, at least 1; 0 where it cannot.
 
     Sand (1600) into water (1000): 0.94; water into oil (850): 0.38; steam (0.6) through the
     air (1.2), with INTO_AIR: 0.75.
     """
+    other = np.asarray(other, float)
     gap = (mover - other) * fall_dir
     factor, most = eagerness
-    return max(1, min(most, int(round(factor * ALWAYS * gap / max(mover, other))))) if gap > 0 else 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        chance = np.where(gap > 0, np.clip(np.round(factor * ALWAYS * gap / np.maximum(mover, other)), 1, most), 0).astype(np.int64)
+    return chance if chance.ndim else int(chance)
 
 
 def _empty_tables(n: int) -> Tables:
@@ -429,12 +433,8 @@ def _empty_tables(n: int) -> Tables:
         reactive=np.zeros(n, np.int64),
         displace=np.zeros((n, n), np.uint8),
         displaces=np.zeros(n, np.int64),
-        react_chance=np.zeros((n, n), np.uint32),
-        react_into_a=np.zeros((n, n), np.uint16),
-        react_into_b=np.zeros((n, n), np.uint16),
-        react_tsum_min=np.full((n, n), -(2**31), np.int32),
-        react_tsum_max=np.full((n, n), 2**31 - 1, np.int32),
-        react_heat=np.zeros((n, n), np.int32),
+        react_pair=np.zeros((n, n), np.uint16),
+        **_reaction_rows([NO_REACTION]),
         heat_cap=np.ones(n, np.int64),
         heat_recip=np.ones(n, np.int64),
         conductance=np.zeros(n, np.int64),
@@ -482,16 +482,18 @@ def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tupl
     return (non_empty - matched, 1) if negate else (matched, score)
 
 
-def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, below) -> tuple[CompiledReaction, ...]:
-    """Fill the interaction matrix. Of two reactions on a pair, the more specific wins (names over
-    tags over wildcards), then the one with the higher ``priority``, then the one of the mod loaded
-    later: a warning where neither mod requires the other, an error within one mod."""
-    # pair -> ((specificity, priority), mod, reaction number, (a becomes, b becomes, threshold, lowest and highest T sum, heat))
+def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, below) -> tuple[tuple[CompiledReaction, ...], Tables]:
+    """Fill the pair table and make the reaction rows it points to (one per reaction and side: a
+    row serves every pair a reaction matches). Of two reactions on a pair, the more specific wins
+    (names over tags over wildcards), then the one with the higher ``priority``, then the one of
+    the mod loaded later: a warning where neither mod requires the other, an error within one mod."""
+    # pair -> ((specificity, priority), mod, reaction number, outcome, row): the outcome (a becomes,
+    # b becomes, threshold, lowest and highest T sum, heat) with elements, the row with STAYS
     winner: dict[tuple[int, int], tuple[tuple[int, int], LoadedMod, int, tuple]] = {}
     reported: set[tuple[str, int, str, int]] = set()  # ties already named, by both reactions
     compiled: list[CompiledReaction] = []
 
-    def claim(pair, outcome, rank, mod, number) -> None:
+    def claim(pair, outcome, row, rank, mod, number) -> None:
         held = winner.get(pair)
         if held is not None and (held[0] > rank or (held[0] == rank and held[3] == outcome)):
             return
@@ -503,7 +505,7 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, b
                     _report_tie(elements, pair, mod, number, held, problems if held[1].name == mod.name else warnings)
                 if held[1].name == mod.name:
                     return
-        winner[pair] = (rank, mod, number, outcome)
+        winner[pair] = (rank, mod, number, outcome, row)
 
     for mod in mods:
         for number, reaction in enumerate(mod.spec.reactions):
@@ -518,26 +520,62 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, b
             threshold = chance_threshold(reaction.chance)
             low = -(2**31) if reaction.min_temperature is None else 2 * temperature_units(reaction.min_temperature)
             high = 2**31 - 1 if reaction.max_temperature is None else 2 * temperature_units(reaction.max_temperature)
-            heat = temperature_units(reaction.heat)
+            rest = (threshold, low, high, temperature_units(reaction.heat))
+            first, second = (STAYS if into is None else into for into in (into_a, into_b))
+            forward, backward = (first, second, *rest), (second, first, *rest)
+            rank = (score_a + score_b, reaction.priority)
             for i in sorted(set_a):
                 for j in sorted(set_b):
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
-                    rank = (score_a + score_b, reaction.priority)
-                    claim((i, j), (out_i, out_j, threshold, low, high, heat), rank, mod, number)
+                    claim((i, j), (out_i, out_j, *rest), forward, rank, mod, number)
                     if i != j:  # the same contact, seen from the other cell
-                        claim((j, i), (out_j, out_i, threshold, low, high, heat), rank, mod, number)
+                        claim((j, i), (out_j, out_i, *rest), backward, rank, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
                 )
             )
-    for pair, (_, _, _, (first, second, threshold, low, high, heat)) in winner.items():
-        t.react_into_a[pair], t.react_into_b[pair], t.react_chance[pair] = first, second, threshold
-        t.react_tsum_min[pair], t.react_tsum_max[pair], t.react_heat[pair] = low, high, heat
-    t.reactive[:] = element_masks(t.react_chance)
+    rows = {NO_REACTION: 0}
+    for pair, (*_, row) in winner.items():
+        t.react_pair[pair] = rows.setdefault(row, len(rows))
+    t.reactive[:] = element_masks(t.react_pair)
     problems.extend(_endless_reactions(winner, elements))
-    return tuple(compiled)
+    return tuple(compiled), t._replace(**_reaction_rows(list(rows)))
+
+
+#: Row 0 of the reaction tables: what a pair without a reaction reads.
+NO_REACTION = (STAYS, STAYS, 0, -(2**31), 2**31 - 1, 0)
+
+
+class PairReaction(NamedTuple):
+    """What a touching pair does, read from the tables (:func:`pair_reaction`)."""
+
+    chance: int  # roll threshold per frame of contact
+    into_a: int  # what a becomes (itself where it stays)
+    into_b: int
+    tsum_min: int  # lowest T_a + T_b, TEMP_ONE units
+    tsum_max: int
+    heat: int  # temperature added to a cell that changes, TEMP_ONE units
+
+
+def pair_reaction(t: Tables, a: int, b: int) -> PairReaction | None:
+    """The reaction of a cell of element ``a`` touching one of ``b``, or None."""
+    row = int(t.react_pair[a, b])
+    if row == 0:
+        return None
+    into_a, into_b = (int(t.react_into_a[row]), int(t.react_into_b[row]))
+    return PairReaction(int(t.react_chance[row]), a if into_a == STAYS else into_a, b if into_b == STAYS else into_b,
+                        int(t.react_tsum_min[row]), int(t.react_tsum_max[row]), int(t.react_heat[row]))
+
+
+def _reaction_rows(rows: Sequence[tuple]) -> dict[str, np.ndarray]:
+    """The react_ tables (but react_pair) of these rows: (a becomes, b becomes, threshold, lowest
+    and highest T sum, heat) each, STAYS for a cell that stays."""
+    columns = list(zip(*rows))
+    names_types = (("react_into_a", np.uint16), ("react_into_b", np.uint16), ("react_chance", np.uint32),
+                   ("react_tsum_min", np.int32), ("react_tsum_max", np.int32), ("react_heat", np.int32))
+    return {name: np.array(column, kind) for (name, kind), column in zip(names_types, columns)}
 
 
 def _report_tie(elements, pair, mod, number, held, into: list[Problem]) -> None:
@@ -573,7 +611,7 @@ def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Pr
 
     always = {
         pair: (first, second)
-        for pair, (_, _, _, (first, second, _, low, high, _)) in winner.items()
+        for pair, (_, _, _, (first, second, _, low, high, _), _) in winner.items()
         if low <= every[0] and high >= every[1] and (first, second) != pair and all(stuck(e) for e in (*pair, first, second))
     }
     problems: list[Problem] = []
@@ -586,7 +624,7 @@ def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Pr
         if (pair in path or (pair[1], pair[0]) in path) and not reported & set(path):
             reported.update(path)
             reported.update((b, a) for a, b in path)  # the same contacts, seen from the other cell
-            _, mod, number, _ = winner[start]
+            _, mod, number, *_ = winner[start]
             steps = " -> ".join(f"{elements[a].name} + {elements[b].name}" for a, b in [*path, pair])
             problems.append(
                 mod.source.problem(

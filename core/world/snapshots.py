@@ -82,7 +82,7 @@ def load_snapshot(world: World, path: Path) -> list[str]:
         raise fail(f"made for a {size[1]}x{size[0]} world; this world is {world.width}x{world.height}")
     for key, like in expected.items():
         got = arrays.get(key)
-        # Element numbers are remapped below, so any unsigned width will do (older files' carry was uint16).
+        # Element numbers are remapped below, so any unsigned width will do (older files' carry was uint8, and before that uint16).
         same_kind = got is not None and (got.dtype == like.dtype or (key in ELEMENT_ARRAYS and got.dtype.kind == "u"))
         if key == "awake" and got is None:
             continue  # older files: every chunk wakes

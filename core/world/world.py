@@ -1,11 +1,11 @@
 """The state of a world: a few numpy arrays, painted by shapes and stepped by the kernel.
 
-Per cell (15 bytes): the element (uint16), a shade (uint8, picked at birth,
-travels with the cell), a timer (uint16: lifetime left, or burning time left),
-flags (uint8: moved this frame, reacted, loose, burning, scorched), a velocity
-(two int16, in 1/256ths of a cell per frame), for flying particles the element
-carried (uint8: a ruleset has at most 256 elements), and its heat (int32: heat
-capacity x temperature, so that conduction conserves it exactly). Building
+Per cell (16 bytes): the element (uint16: a ruleset has at most 4,096), a
+shade (uint8, picked at birth, travels with the cell), a timer (uint16:
+lifetime left, or burning time left), flags (uint8: moved this frame, reacted,
+loose, burning, scorched), a velocity (two int16, in 1/256ths of a cell per
+frame), for flying particles the element carried (uint16), and its heat
+(int32: heat capacity x temperature, so that conduction conserves it exactly). Building
 and painting a world needs no numba; stepping it does.
 """
 
@@ -75,7 +75,7 @@ class State(NamedTuple):
     flags: np.ndarray  # uint8: kernel flags
     vx: np.ndarray  # int16: velocity, 1/256ths of a cell per frame, right positive
     vy: np.ndarray  # int16: velocity, down positive
-    carry: np.ndarray  # uint8: what a flying particle carries (0 elsewhere)
+    carry: np.ndarray  # uint16: what a flying particle carries (0 elsewhere)
     heat: np.ndarray  # int32: heat energy, heat_cap x temperature (fixed point, see compiler)
 
 
@@ -262,7 +262,7 @@ class World:
             flags=np.zeros(shape, np.uint8),
             vx=np.zeros(shape, np.int16),
             vy=np.zeros(shape, np.int16),
-            carry=np.zeros(shape, np.uint8),
+            carry=np.zeros(shape, np.uint16),
             heat=np.zeros(shape, np.int32),
         )
         chunks = (-(-height // CHUNK), -(-width // CHUNK))
