@@ -22,10 +22,13 @@ EXAMPLES = Path(__file__).parent.parent / "examples"
 
 
 def digest(world) -> str:
-    """A hash of every cell's state: its values, whatever width each array stores them in."""
+    """A hash of every cell's state: its values, whatever width each array stores them in, and its
+    elements by their place in :attr:`Ruleset.listed`, whatever numbers the compiler gave them."""
+    listed = np.empty(len(world.ruleset.elements), np.int64)
+    listed[[e.index for e in world.ruleset.listed]] = np.arange(len(listed))
     h = hashlib.sha256()
-    for array in world.state:
-        h.update(array.astype(np.int64).tobytes())
+    for name, array in zip(world.state._fields, world.state):
+        h.update((listed[array] if name in ("cells", "carry") else array.astype(np.int64)).tobytes())
     return h.hexdigest()
 
 

@@ -7,7 +7,6 @@ import pytest
 
 from conftest import write_mods
 from sandmod.rules.compiler import (
-    pair_reaction,
     ARCHETYPE_CODES,
     BLAST_RADIUS,
     CAP_ONE,
@@ -18,7 +17,9 @@ from sandmod.rules.compiler import (
     IGNITES,
     SUBCELL,
     TEMP_ONE,
+    pair_reaction,
 )
+from sandmod.engine.layout import UNIQUE_BITS, mask_bit
 from sandmod.errors import ProblemsError
 from sandmod.engine.hashing import ROLL_ONE
 from sandmod.world.loading import load_ruleset
@@ -35,11 +36,6 @@ def problems_of(registry, tmp_path, files: dict[str, str], mods=None) -> list[st
     return [str(p) for p in caught.value.problems]
 
 
-def test_ids_are_empty_first_then_sorted(ruleset):
-    ids = [e.id for e in ruleset.elements]
-    assert ids[0] == "base:empty"
-    assert ids[1:] == sorted(ids[1:])
-    assert [e.index for e in ruleset.elements] == list(range(len(ids)))
 
 
 def test_tables_hold_each_elements_parameters(ruleset):
@@ -88,9 +84,28 @@ def test_neighbour_masks_never_miss_a_partner(ruleset, matrix, masks):
     pairs, bits = getattr(ruleset.tables, matrix), getattr(ruleset.tables, masks).view(np.uint64)
     assert pairs.any()
     for a, b in zip(*np.nonzero(pairs)):
-        assert bits[a] >> np.uint64(b % 64) & np.uint64(1), (ruleset.elements[a].id, ruleset.elements[b].id)
+        assert bits[a] >> np.uint64(mask_bit(int(b))) & np.uint64(1), (ruleset.elements[a].id, ruleset.elements[b].id)
     partnerless = ~(pairs > 0).any(axis=1)
     assert (bits[partnerless] == 0).all()  # no partners: the kernel's first test ends it at once
+
+
+def test_the_kernel_and_the_compiler_give_an_element_the_same_mask_bit():
+    from sandmod.engine.cells import _bit
+
+    for e in (0, 1, UNIQUE_BITS - 1, UNIQUE_BITS, UNIQUE_BITS + 5, 3 * UNIQUE_BITS + 7, 4095):
+        assert np.uint64(_bit.py_func(np.uint16(e)).view(np.uint64)) == 1 << mask_bit(e)
+    assert {mask_bit(e) for e in range(UNIQUE_BITS)} == set(range(UNIQUE_BITS))  # the first ones, a bit each
+    assert {mask_bit(e) for e in range(UNIQUE_BITS, 4096)} == set(range(UNIQUE_BITS, 64))  # the others share the rest
+
+
+def test_the_elements_most_react_with_are_numbered_first_and_listed_by_id(ruleset):
+    """Acid eats nearly everything, so it is a partner of the most elements: it gets a mask bit of its own."""
+    assert ruleset.elements[0].id == "base:empty"
+    assert [e.index for e in ruleset.elements] == list(range(len(ruleset.elements)))
+    partners = (ruleset.tables.react_pair > 0).sum(axis=0)
+    assert list(partners[1:]) == sorted(partners[1:], reverse=True)
+    assert ruleset.elements[1].id == "acid:acid"
+    assert [e.id for e in ruleset.listed[1:]] == sorted(e.id for e in ruleset.elements[1:])
 
 
 def test_reactions_fill_the_matrix_both_ways(ruleset):

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import hashing, traversal
 from .jit import compiled, inlined
-from .layout import ARCHETYPE_CODES, BURNING, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, PLUME, PLUME_RUN, PLUME_RUN_SHIFT, PLUME_SHIFT, REACTED, SCORCHED, TEMP_ONE
+from .layout import ARCHETYPE_CODES, BURNING, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, mask_bit, PLUME, PLUME_RUN, PLUME_RUN_SHIFT, PLUME_SHIFT, REACTED, SCORCHED, TEMP_ONE
 
 STATIC = ARCHETYPE_CODES["static"]
 POWDER = ARCHETYPE_CODES["powder"]
@@ -81,10 +81,13 @@ def _run_end(key, x, y, g):
     return first if g > 0 else first + PLUME_RUN - 1
 
 
+_mask_bit = compiled(mask_bit)
+
+
 @compiled
 def _bit(e):
-    """Element e's bit in the element masks (``reactive``, ``displaces``): bit e % 64."""
-    return np.int64(1) << (e & 63)
+    """Element e's bit in the element masks (``reactive``, ``displaces``): see :func:`~.layout.mask_bit`."""
+    return np.int64(1) << _mask_bit(e)
 
 
 @compiled

@@ -43,7 +43,7 @@ from .fire import heat_and_fire
 from .heat import conduct
 from .jit import compiled, in_place, inlined, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
-from .moves import fluid_near, knock, move, sink_run, slump, slump_side
+from .moves import knock, may_flow, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
 from .prefetch import prefetch
 from .reactions import lifetime, react
@@ -140,7 +140,7 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key,
         if sliding and kind != POWDER:
             break  # moving: the full update
         if kind == LIQUID or kind == GAS:
-            if (t.displaces[e] & present) != 0 and (t.displaces[e] & fluid_near(cells, x, y, t.fall_dir[e])) != 0:
+            if (t.displaces[e] & present) != 0 and may_flow(cells, t.displace, e, x, y, t.fall_dir[e]):
                 break  # it may displace something next to it
             n += 1  # at rest, with nothing it could displace where it could go: stays put
             continue

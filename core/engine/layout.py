@@ -36,6 +36,16 @@ ALWAYS = 255
 STAYS = 0xFFFF
 #: Most elements loaded at once: ids and what a particle carries are uint16, below STAYS.
 MAX_ELEMENTS = 4096
+#: The element masks (Tables.reactive and displaces, the elements present in a region): elements
+#: 0..UNIQUE_BITS-1 have a bit each; the others share the rest, element e bit UNIQUE_BITS + e %
+#: UNIQUE_BITS (see :func:`mask_bit`). The compiler numbers first the elements that most others
+#: react with, so that with thousands loaded a mask still tells the common partners apart exactly.
+UNIQUE_BITS = 32
+
+
+def mask_bit(e):
+    """Element e's bit in the element masks (a number or a numpy array of them)."""
+    return e & (UNIQUE_BITS - 1) | UNIQUE_BITS if e >= UNIQUE_BITS else e
 
 # Bits of State.flags. New cells start loose; the kernel clears MOVED and REACTED each frame;
 # the others travel with the cell and are dropped when it turns into another element.

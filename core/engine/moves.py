@@ -126,15 +126,16 @@ def _fluid_move_cell(x, y, g, k):
 
 
 @inlined
-def fluid_near(cells, x, y, g):
-    """The mask of the elements in the first cells of a liquid's or gas's five moves."""
+def may_flow(cells, displace, e, x, y, g):
+    """Does a first cell of one of a liquid's or gas's five moves hold an element it may displace
+    (the air too)? Read from the table, not the masks: with many elements loaded every bit of a
+    fluid's mask is set, and a resting pool would never be let be."""
     height, width = cells.shape
-    near = 0
     for k in range(5):
         nx, ny = _fluid_move_cell(x, y, g, k)
-        if _inside(nx, ny, width, height):
-            near |= _bit(cells[_at(ny, nx)])
-    return near
+        if _inside(nx, ny, width, height) and displace[e, cells[_at(ny, nx)]] != 0:
+            return True
+    return False
 
 
 @inlined
@@ -495,7 +496,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
     if fluid and old_vx == 0 and old_vy == 0:
         # At rest, first a cheap test of its five moves' cells: holds none an element it may displace?
         # Then it stays put, as most of a body of liquid does.
-        if (displaces & present) == 0 or (displaces & fluid_near(cells, x, y, g)) == 0:
+        if (displaces & present) == 0 or not may_flow(cells, t.displace, e, x, y, g):
             return False, False, np.int64(0), x, y, y
     busy = False
     opens = False
@@ -512,7 +513,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
                     return busy, False, np.int64(0), x, y, y  # a grain waits for its chance to sink (fluids flow aside meanwhile)
     can_flow = False  # liquids and gases on the ground: is the first cell of any of their moves open?
     if fluid and not opens and (displaces & present) != 0:
-        for k in range(1, 5):  # the cells fluid_near looks at, less the one below
+        for k in range(1, 5):  # the cells may_flow looks at, less the one below
             nx, ny = _fluid_move_cell(x, y, g, k)
             if _inside(nx, ny, width, height) and _enterable(t.displace[e, cells[_at(ny, nx)]], cells[_at(ny, nx)], flags[_at(ny, nx)]):
                 can_flow = True

@@ -1,7 +1,8 @@
 """Compile loaded mods into the dense tables the kernel reads.
 
 Element ids are ``mod:element``. Numeric ids are given here, in a fixed order
-(``base:empty`` is 0, then the ids sorted), and never written into files.
+(``base:empty`` is 0, then those that most elements react with first, then by
+id), and never written into files.
 Reactions become rows (what each cell of a touching pair becomes, and the
 chance per frame) and an n x n table of which row each pair reads (2 bytes a
 pair); densities and archetypes become a displacement matrix (which element
@@ -44,6 +45,7 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     STAYS,
     SUBCELL,
     TEMP_ONE,
+    mask_bit,
 )
 from .definitions import Definition, Override, collect_definitions, required_below, resolve_name
 from .glow import GLOW_COLOURS, GLOW_FROM, GLOW_MIX, GLOW_STEP  # noqa: F401  (names the other modules take from here too)
@@ -155,7 +157,7 @@ class Ruleset:
 
     #: The mods loaded, in load order.
     mods: tuple[LoadedMod, ...]
-    #: Every element, by id (0 is ``base:empty``).
+    #: Every element, by number (0 is ``base:empty``; :attr:`listed` is by id).
     elements: tuple[ElementInfo, ...]
     #: Every reaction, compiled.
     reactions: tuple[CompiledReaction, ...]
@@ -173,6 +175,11 @@ class Ruleset:
     def particle(self) -> int:
         """The id of ``base:particle``, what launched cells fly as."""
         return self._ids[PARTICLE_ID]
+
+    @property
+    def listed(self) -> tuple[ElementInfo, ...]:
+        """Every element, the empty cell first, then by id: the order to show them in."""
+        return self.elements[:1] + tuple(sorted(self.elements[1:], key=lambda e: e.id))
 
     @property
     def shades(self) -> int:
@@ -209,14 +216,11 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
             problems.append(found.source.problem(found.loc + ("archetype",), f"'{required}' must be '{archetype}'"))
     if problems:
         raise ProblemsError(problems)
-    order = [EMPTY_ID] + sorted(i for i in defs if i != EMPTY_ID)
-    if len(order) > MAX_ELEMENTS:
-        raise ProblemsError([Problem("mods", None, "", f"{len(order)} elements loaded; at most {MAX_ELEMENTS}")])
-    ids = {element_id: i for i, element_id in enumerate(order)}
-    elements = tuple(
-        ElementInfo(i, eid, defs[eid].spec, defs[eid].source, defs[eid].mod, tuple(defs[eid].replaced), tuple(defs[eid].history))
-        for i, eid in enumerate(order)
-    )
+    if len(defs) > MAX_ELEMENTS:
+        raise ProblemsError([Problem("mods", None, "", f"{len(defs)} elements loaded; at most {MAX_ELEMENTS}")])
+    elements = _numbered(defs, [EMPTY_ID] + sorted(i for i in defs if i != EMPTY_ID))
+    elements = _numbered(defs, [EMPTY_ID] + _by_partners(mods, elements))
+    ids = {e.id: e.index for e in elements}
     by_mod = {m.name: m for m in mods}
 
     below = required_below(mods)
@@ -232,7 +236,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
             return None
         return ids[found]
 
-    t = _empty_tables(len(order))
+    t = _empty_tables(len(elements))
     for info in elements:
         d = defs[info.id]
         _fill_element(t, info, d, problems)
@@ -260,6 +264,30 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
         raise ProblemsError(problems)
     palette, looks = _palette(elements, t.heat_recip)
     return Ruleset(tuple(mods), elements, reactions, t, palette, looks, ids, tuple(warnings))
+
+
+def _numbered(defs: dict[str, "Definition"], order: Sequence[str]) -> tuple[ElementInfo, ...]:
+    """The elements of ``defs``, numbered in ``order``."""
+    return tuple(
+        ElementInfo(i, eid, defs[eid].spec, defs[eid].source, defs[eid].mod, tuple(defs[eid].replaced), tuple(defs[eid].history))
+        for i, eid in enumerate(order)
+    )
+
+
+def _by_partners(mods: Sequence[LoadedMod], elements: Sequence[ElementInfo]) -> list[str]:
+    """The ids but the empty cell's, those that the most elements react with first (then by id): the
+    first take the element masks' own bits (:data:`~sandmod.engine.layout.UNIQUE_BITS`)."""
+    ids = {e.id: e.index for e in elements}
+    partners = np.zeros(len(elements), np.int64)
+    for mod in mods:
+        for reaction in mod.spec.reactions:
+            sides = [_select(selector, elements, lambda r: ids.get(resolve_name(r, mod.name, ids, mod.requires)[0]))
+                     for selector in (reaction.a, reaction.b)]
+            if None not in sides:
+                (side_a, _), (side_b, _) = sides
+                partners[list(side_a)] += len(side_b)
+                partners[list(side_b)] += len(side_a)
+    return [e.id for e in sorted(elements[1:], key=lambda e: (-partners[e.index], e.id))]
 
 
 def _fill_element(t: Tables, info: ElementInfo, d: "Definition", problems: list[Problem]) -> None:
@@ -591,11 +619,12 @@ def _report_tie(elements, pair, mod, number, held, into: list[Problem]) -> None:
 
 
 def element_masks(pairs: np.ndarray) -> np.ndarray:
-    """Per element ``a``, the bits ``b % 64`` of the elements ``b`` with ``pairs[a, b] > 0`` (those it reacts
-    with, or may swap with): a cheap first test of a cell's neighbours, never missing a partner."""
+    """Per element ``a``, the bits (:func:`~sandmod.engine.layout.mask_bit`) of the elements ``b`` with
+    ``pairs[a, b] > 0`` (those it reacts with, or may swap with): a cheap first test of a cell's
+    neighbours, never missing a partner."""
     bits = np.zeros(pairs.shape[0], np.uint64)
     for b in np.flatnonzero((pairs > 0).any(axis=0)):
-        bits[pairs[:, b] > 0] |= np.uint64(1) << np.uint64(b % 64)
+        bits[pairs[:, b] > 0] |= np.uint64(1) << np.uint64(mask_bit(int(b)))
     return bits.view(np.int64)
 
 

@@ -3,6 +3,7 @@
     python tools/dev/bench.py against /tmp/old_kernel.py --scene mix --threads 1
     python tools/dev/bench.py in-turns --scene everything --threads 1 --threads 2
     python tools/dev/bench.py yardstick --scene mix --threads 1 --threads 2
+    python tools/dev/bench.py loaded --scene mix --elements 500 --threads 1
 
 Each takes turns over stretches of 25 steps, each stretch three times from
 the same state, and counts the best times: a fair comparison on a machine
@@ -16,7 +17,10 @@ their rules differ. ``in-turns`` does the same for the ``--threads`` counts,
 and checks that every count steps to the same frames. ``yardstick`` times the
 kernel with the yardstick (:mod:`yardstick`) on each ``--threads`` count: what
 this machine allows at the time, the kernel's speed as a share of it, and what
-more threads give each of them.
+more threads give each of them. ``loaded`` times a scene with only sand's
+and water's mods loaded against the same scene with generated packs
+(``packs.py``) loaded too, ``--elements`` in all: what loading many elements
+costs a world that uses few.
 """
 
 from __future__ import annotations
@@ -177,6 +181,64 @@ def in_turns(scenes, worlds, size, steps, thread_counts, busy, as_json) -> None:
                 continue
             speeds = [f"{_threads(r.threads)} {r.mcell_updates_per_second:.1f}" + (f" ({r.speedup:.2f}x)" if i else "") for i, r in enumerate(results)]
             click.echo(f"{_what(b, count)}, in turns: {', '.join(speeds)} million cell-updates/s, same frames")
+
+
+@dataclass(frozen=True)
+class Loaded(benchmark._Result):
+    """One scene with its own mods loaded, and with generated packs beside them (``loaded --json``)."""
+
+    scene: str
+    width: int
+    height: int
+    steps: int
+    threads: int | str
+    elements: int  # loaded in all, the packs' and the bundled mods'
+    few_elements: int  # loaded with the scene's own mods only
+    mcell_updates_per_second: float  # with all loaded
+    few_mcell_updates_per_second: float
+    ratio: float  # the speed with all loaded over the speed with few
+
+
+@main.command()
+@click.option("--elements", type=click.IntRange(30, 4096), default=500, show_default=True, help="Elements loaded in all: generated packs of 25 beside the bundled mods.")
+@_options
+def loaded(elements, scenes, worlds, size, steps, thread_counts, busy, as_json) -> None:
+    """Time a scene with only its mods loaded against the same scene with many more elements loaded (generated packs), in turns on the same cells."""
+    import tempfile
+
+    from kernels import FramesDiffer, compare_worlds
+    from packs import write_packs
+    from sandmod.world.loading import load_ruleset
+
+    if worlds:
+        raise click.UsageError("loaded times the built-in scenes (sand and water), not a --world")
+    thread_counts = thread_counts or (1,)
+    few = load_ruleset(["sand", "water"])
+    with tempfile.TemporaryDirectory() as folder:
+        bundled = len(load_ruleset().elements)
+        packs = max(1, -(-(elements - bundled) // 25))
+        write_packs(Path(folder), packs, 25)
+        many = load_ruleset(None, [Path(folder)])
+    runs = _runs(scenes, (), size, steps, thread_counts)
+    with benchmark.busy_processes(busy):
+        for b, count in runs:
+            cells = b.width * b.height * count / 1e6
+            pair = [benchmark.scene_bench(ruleset, b.name, size) for ruleset in (few, many)]
+            for threads in thread_counts:
+                try:
+                    mine, theirs = compare_worlds(pair, count, threads)
+                except FramesDiffer as differ:
+                    click.echo(f"error: {b.name}: with {len(many.elements)} elements loaded the cells differ (by frame {differ.frame})", err=True)
+                    sys.exit(1)
+                result = Loaded(b.name, b.width, b.height, count, _named(threads), len(many.elements), len(few.elements),
+                                round(cells / theirs, 1), round(cells / mine, 1), round(mine / theirs, 3))
+                _report(
+                    result,
+                    as_json,
+                    f"{_what(b, count)}, {_threads(threads)}, in turns: {result.few_elements} elements loaded "
+                    f"{result.few_mcell_updates_per_second:.1f} million cell-updates/s, {result.elements} loaded "
+                    f"{result.mcell_updates_per_second:.1f}: {result.ratio:.3f}x, same cells",
+                )
 
 
 @main.command()

@@ -235,3 +235,41 @@ def compare(
             run.go_on_from(end if own_frames else ends[0])
 
     return in_turns(runs, steps, segment=segment, repeats=repeats, after=after)
+
+
+def _by_id(world: World, into: World) -> np.ndarray:
+    """``world``'s element numbers as ``into``'s ruleset numbers them (-1: not loaded there)."""
+    ids = {e.id: e.index for e in into.ruleset.elements}
+    return np.array([ids.get(e.id, -1) for e in world.ruleset.elements], np.int64)
+
+
+def same_cells(world: World, other: World) -> bool:
+    """Whether two worlds of different rulesets hold the same cells, element by element id."""
+    remap = _by_id(other, world)
+    for name, mine, theirs in zip(world.state._fields, world.state, other.state):
+        if not np.array_equal(mine, remap[theirs] if name in ("cells", "carry") else theirs):
+            return False
+    return True
+
+
+def compare_worlds(benches: Sequence[Bench], steps: int, threads: int | None, *, segment: int = 25, repeats: int = 3) -> list[float]:
+    """Seconds each of ``benches`` (one scene, each world of its own ruleset) takes for ``steps``
+    steps with this kernel, in turns; :class:`FramesDiffer` unless they reach the same cells,
+    element by id, at the end of every stretch."""
+    from sandmod.engine import kernel
+
+    runs = [_KernelRun(bench.make(), kernel, threads) for bench in benches]
+    for run in runs:
+        run.rewind()
+        run.run(range(1))
+        run.end = None
+
+    def after(frames: range) -> None:
+        for run in runs:
+            restore(run.world, run.end, run.frame + len(frames))
+        if not all(same_cells(runs[0].world, run.world) for run in runs[1:]):
+            raise FramesDiffer(runs[0].frame + len(frames))
+        for run in runs:
+            run.go_on_from(run.end)
+
+    return in_turns(runs, steps, segment=segment, repeats=repeats, after=after)
