@@ -263,7 +263,9 @@ class _ElementBase(_Strict):
     tags: list[Tag] = Field(default_factory=list, description="Tags that reaction selectors ('#tag') match.")
     category: Tag | None = Field(None, description=_CATEGORY, examples=["explosives"])
     hidden: bool = Field(
-        False, description="Leave it out of the element menu in 'sandmod play' (a search there still finds it): for intermediate forms a player need not paint.", examples=[True]
+        False,
+        description="Leave it out of the element menu in 'sandmod play' (a search there still finds it): for intermediate forms a player need not paint.",
+        examples=[True],
     )
     lifetime: Lifetime | None = Field(None, description="Turn into another element after a while.")
     override: bool = Field(
