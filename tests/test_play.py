@@ -451,6 +451,10 @@ def test_the_keys_move_through_sections_elements_and_pages():
     key(play, pygame.K_PAGEUP)
     key(play, pygame.K_PAGEUP)
     assert menu.page == 0
+    pygame.mouse.set_pos((10, play.view.area[1] + 30))
+    post(pygame.MOUSEWHEEL, x=0, y=-1)  # the wheel over the menu turns its pages, not the brush's size
+    frames(play, 1)
+    assert menu.page == 1 and play.brush.size == 5
 
 
 def test_the_number_keys_give_the_favourites_and_m_pins_and_unpins():
