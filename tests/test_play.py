@@ -488,7 +488,7 @@ def test_the_number_keys_give_the_favourites_and_m_pins_and_unpins():
     assert play.session.world.ruleset.index("goo") in liquids
 
 
-SECTIONS = ("metals", "plants", "machines", "food", "minerals", "weather", "space", "toys", "tools", "life")
+SECTIONS = ("metals", "plants", "machines", "food", "minerals", "weather", "space", "favourites", "tools", "found")  # the last two: tabs apart from the menu's own
 FIELDS = {"powder": "density = 1500", "liquid": "density = 1000\ndispersion = 2", "gas": "density = 0.5\ndispersion = 2", "static": ""}
 #: 20 packs of 25 elements, 500 in all, once the loader takes them (at most MAX_ELEMENTS, now 256: 10 each till then).
 PACKS, PER_PACK = 20, 25 if MAX_ELEMENTS > 530 else 10

@@ -10,8 +10,8 @@ from itertools import groupby, zip_longest
 from ...formats.modspec import ARCHETYPE_CATEGORIES
 from ...rules.compiler import Ruleset
 
-FAVOURITES = "favourites"
-FOUND = "found"  # the section of a search's matches
+FAVOURITES = "Favourites"  # capitalised, unlike every category: the names of these two sections are theirs alone
+FOUND = "Found"  # the section of a search's matches
 KEYED = 9  # the favourites the number keys give
 #: The sections of elements without a category of their own, in the menu's order; the mods' own follow, by name.
 FIRST = tuple(ARCHETYPE_CATEGORIES[a] for a in ("powder", "liquid", "gas", "static", "particle"))
