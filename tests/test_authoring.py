@@ -152,6 +152,22 @@ def test_a_patch_changes_the_fields_it_names_and_keeps_the_rest(tmp_path, monkey
     assert lines[lines.index(next(line for line in lines if line.startswith("sand:sand: "))) + 1].startswith("  patched by heavy (mods/heavy.toml:4): density")
 
 
+def test_a_patch_files_an_element_in_another_menu_section_or_hides_it(tmp_path, monkeypatch):
+    from sandmod.world.loading import load_ruleset
+
+    menu = '[mod]\nname = "menu"\nrequires = ["sand", "explosives"]\n[elements."sand:sand"]\ncategory = "land"\n[elements."explosives:tnt"]\nhidden = true\n'
+    write_mods(tmp_path / "mods", {"menu.toml": menu})
+    bundled = {e.id: e.spec for e in load_ruleset().elements}
+    patched = {e.id: e.spec for e in load_ruleset(mod_dirs=[tmp_path / "mods"]).elements}
+    assert (bundled["sand:sand"].menu_category, bundled["explosives:tnt"].menu_category, bundled["explosives:tnt"].hidden) == ("powders", "explosives", False)
+    assert (patched["sand:sand"].menu_category, patched["explosives:tnt"].hidden) == ("land", True)
+    assert patched["sand:sand"].model_dump(exclude={"category"}) == bundled["sand:sand"].model_dump(exclude={"category"})
+    write_mods(tmp_path / "mods", {"menu.toml": menu.replace('"land"', '"Land!"')})
+    monkeypatch.chdir(tmp_path)
+    result = invoke("validate", "mods")
+    assert result.exit_code == 2 and result.stderr == "mods/menu.toml:5:1: elements.sand:sand.category: must be a lower-case name like 'acid_proof' (got 'Land!')\n"
+
+
 def test_one_field_patched_by_two_mods_that_do_not_require_each_other_is_a_warning(tmp_path, monkeypatch):
     def patch(name: str, requires: str, density: int) -> str:
         return f'[mod]\nname = "{name}"\nrequires = [{requires}]\n[elements."sand:sand"]\ndensity = {density}\nfriction = 0.5\n'

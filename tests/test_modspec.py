@@ -50,7 +50,7 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.lava]\narchetype = "liquid"\ncolor = "#ff0000"\ndensity = 5\ndispersion = 1\nglow = true\n',
             "m.toml:9:1: elements.lava.glow: unknown field; allowed here: description, color, shade, tags, "
-            "lifetime, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
+            "category, hidden, lifetime, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
             "explosion, explosion_resistance, ignites, extinguishes, archetype, density, dispersion, viscosity, "
             "gravity, max_speed",
         ),
@@ -67,12 +67,16 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.wall]\narchetype = "static"\ncolor = "#123456"\ndispersion = 3\n',
             "m.toml:7:1: elements.wall.dispersion: unknown field; allowed here: description, color, shade, tags, "
-            "lifetime, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
+            "category, hidden, lifetime, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
             "explosion, explosion_resistance, ignites, extinguishes, archetype",
         ),
         (
             '[elements.x]\narchetype = "static"\ncolor = "#123456"\nheated = { above = 100 }\n',
             "m.toml:7:1: elements.x.heated.becomes: required field is missing",
+        ),
+        (
+            '[elements.x]\narchetype = "static"\ncolor = "#123456"\ncategory = "Fire Stuff"\n',
+            "m.toml:7:1: elements.x.category: must be a lower-case name like 'acid_proof' (got 'Fire Stuff')",
         ),
         (
             '[elements.x]\narchetype = "static"\ncolor = "#123456"\ntemperature = -300\n',

@@ -16,8 +16,10 @@ pygame = pytest.importorskip("pygame")
 from sandmod.jobs import session as session_module  # noqa: E402
 from sandmod.jobs.benchmark import state_digest  # noqa: E402
 from sandmod.jobs.play import Play  # noqa: E402
-from sandmod.jobs.play.view import PANEL, TEXT  # noqa: E402
+from sandmod.jobs.play.menu import FAVOURITES, FOUND, KEYED, listed, offered  # noqa: E402
+from sandmod.jobs.play.view import CHOSEN, MARGIN, MENU, PANEL, STATUS, TEXT, contrast, ink  # noqa: E402
 from sandmod.jobs.session import Session  # noqa: E402
+from sandmod.rules.compiler import MAX_ELEMENTS  # noqa: E402
 from sandmod.tools.cli import cli  # noqa: E402
 from sandmod.world.loading import load_world  # noqa: E402
 
@@ -351,27 +353,205 @@ def test_each_tool_is_an_undo_step_of_its_own():
     assert play.session.events == [] and play.session.world.frame == 1
 
 
-def test_the_bar_names_its_elements_and_search_prefers_the_exact_name():
+def find(play: Play, text: str) -> None:
+    """Type ``/``, then ``text``, then enter."""
+    post(pygame.KEYDOWN, key=pygame.K_SLASH, mod=0, unicode="/")
+    for letter in text:
+        post(pygame.KEYDOWN, key=ord(letter), mod=0, unicode=letter)
+    key(play, pygame.K_RETURN)
+
+
+def test_search_prefers_the_exact_name_and_shows_its_matches_in_the_menu():
     play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
     ruleset = play.session.world.ruleset
     assert ruleset.elements[play.brush.element].id == "sand:sand"
-    archetypes = [ruleset.elements[e].spec.archetype for e in play.bar]
-    assert archetypes == sorted(archetypes, key=["static", "powder", "liquid", "gas"].index)
     for typed, wanted in (("water", "water:water"), ("fire", "fire:fire"), ("sto", "base:stone")):
-        key(play, pygame.K_SLASH)
-        for letter in typed:
-            post(pygame.KEYDOWN, key=ord(letter), mod=0, unicode=letter)
-        key(play, pygame.K_RETURN)
+        find(play, typed)
         assert ruleset.elements[play.brush.element].id == wanted, typed
-    left, width, element = play.view.bar_slots(play.bar)[3]
-    pygame.mouse.set_pos((left + width // 2, play.view.area[1] + 10))
+    key(play, pygame.K_SLASH)
+    for letter in "as":
+        post(pygame.KEYDOWN, key=ord(letter), mod=0, unicode=letter)
     frames(play, 1)
-    name = ruleset.elements[element].name
-    assert play.view.bar_element_at((left + 1, play.view.area[1] + 5), play.bar) == element
-    key(play, pygame.K_F1)
-    assert play.help
+    shown = [what for _, (kind, what) in play.view.menu_items(play.menu) if kind == "element"]
+    assert play.menu.current().name == FOUND and shown == play._matches() and {ruleset.elements[e].id for e in shown} >= {"fire:ash", "glass:glass", "lava:basalt"}
+    key(play, pygame.K_ESCAPE)
+    assert play.search is None and play.menu.found is None and ruleset.elements[play.brush.element].id == "base:stone"
+    assert play.menu.current().name == FAVOURITES  # as before the search: stone is there
+    find(play, "coal")
+    assert play.menu.current().name == "powders" and ruleset.index("coal") in play.menu.on_page()  # where coal is
+
+
+# --- the element menu --------------------------------------------------------------------------
+
+def click(play: Play, rect) -> None:
+    post(pygame.MOUSEBUTTONDOWN, pos=(rect[0] + rect[2] // 2, rect[1] + rect[3] // 2), button=1)
+    post(pygame.MOUSEBUTTONUP, pos=(rect[0] + rect[2] // 2, rect[1] + rect[3] // 2), button=1)
     frames(play, 1)
-    pygame.image.save(play.view.screen, "help.png")
+
+
+def rect_of(play: Play, kind: str, what) -> tuple[int, int, int, int]:
+    """Where the menu shows the tab, button or swatch that does (kind, what)."""
+    return next(rect for rect, action in play.view.menu_items(play.menu) if action == (kind, what))
+
+
+def test_a_tab_shows_its_section_as_labelled_swatches_and_a_click_takes_one():
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    ruleset, view = play.session.world.ruleset, play.view
+    click(play, rect_of(play, "section", "liquids"))
+    liquids = [e for e in offered(ruleset) if ruleset.elements[e].spec.archetype == "liquid"]
+    shown = [(rect, what) for rect, (kind, what) in view.menu_items(play.menu) if kind == "element"]
+    assert play.menu.current().name == "liquids" and [what for _, what in shown] == liquids
+    screen = pygame.surfarray.array3d(view.screen).transpose(1, 0, 2)
+    for (left, top, width, height), element in shown:
+        inside = screen[top + 2 : top + height - 2, left + 2 : left + width - 2].reshape(-1, 3)
+        colours = {tuple(int(c) for c in rgb) for rgb in inside}
+        swatch = ruleset.swatch(element)
+        assert colours >= {swatch, ink(swatch)}, ruleset.elements[element].id  # the swatch, its name on it
+        assert view.font.size(ruleset.elements[element].name)[0] <= width - 10  # the whole name
+    water = ruleset.index("water")
+    click(play, rect_of(play, "element", water))
+    assert play.brush.element == water
+    left, top, width, height = rect_of(play, "element", water)
+    pygame.mouse.set_pos((left + 4, top + 4))
+    frames(play, 1)
+    screen = pygame.surfarray.array3d(view.screen)
+    assert (screen[left, top : top + height] == CHOSEN).all() and (screen[left + width - 1, top : top + height] == CHOSEN).all()  # framed
+    status = screen[:, view.size[1] - STATUS :]
+    text = view.font.render("water:water   liquid, mod water, in liquids", True, TEXT)
+    drawn = pygame.Surface(text.get_size())
+    drawn.fill(PANEL)
+    drawn.blit(text, (0, 0))
+    drawn = pygame.surfarray.array3d(drawn)
+    assert (status[MARGIN : MARGIN + drawn.shape[0], 3 : 3 + drawn.shape[1]] == drawn).all()  # hovered: its id, archetype, mod, section
+    assert view.size[1] == view.area[1] + MENU + STATUS  # the menu below the world, not over it
+
+
+def test_the_keys_move_through_sections_elements_and_pages():
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    ruleset, menu = play.session.world.ruleset, play.menu
+    names = [s.name for s in menu.tabs()]
+    assert names[:5] == [FAVOURITES, "powders", "liquids", "gases", "solids"] and {"energy", "explosives"} <= set(names)
+    key(play, pygame.K_TAB)
+    assert menu.current().name == "powders"
+    key(play, pygame.K_TAB, pygame.KMOD_SHIFT)
+    key(play, pygame.K_TAB, pygame.KMOD_SHIFT)
+    assert menu.current().name == names[-1]
+    key(play, pygame.K_TAB)
+    key(play, pygame.K_TAB)
+    powders = [ruleset.elements[e].id for e in menu.current().elements]
+    assert powders == ["fire:ash", "lava:basalt", "coal:coal", "dirt:dirt", "sand:sand"]
+    key(play, pygame.K_PERIOD)  # after sand, the last: round to the first
+    assert play.brush.element == ruleset.index("fire:ash")
+    key(play, pygame.K_COMMA)
+    key(play, pygame.K_COMMA)
+    assert play.brush.element == ruleset.index("dirt:dirt")
+    menu.per_page = 2  # pages, as a window too narrow for a section would have
+    key(play, pygame.K_PAGEDOWN)
+    assert menu.page == 1 and menu.on_page() == menu.current().elements[2:4]
+    key(play, pygame.K_PAGEUP)
+    key(play, pygame.K_PAGEUP)
+    assert menu.page == 0
+    pygame.mouse.set_pos((10, play.view.area[1] + 30))
+    post(pygame.MOUSEWHEEL, x=0, y=-1)  # the wheel over the menu turns its pages, not the brush's size
+    frames(play, 1)
+    assert menu.page == 1 and play.brush.size == 5
+
+
+def test_the_number_keys_give_the_favourites_and_m_pins_and_unpins():
+    play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
+    menu = play.menu
+    ids = lambda elements: [play.session.world.ruleset.elements[e].id for e in elements]  # noqa: E731
+    assert ids(menu.favourites)[:4] == ["sand:sand", "water:water", "base:stone", "fire:fire"] and len(menu.favourites) == KEYED
+    for number, wanted in ((pygame.K_2, "water:water"), (pygame.K_1, "sand:sand"), (pygame.K_4, "fire:fire")):
+        key(play, number)
+        assert ids([play.brush.element]) == [wanted] and menu.current().name == FAVOURITES
+    find(play, "coal")
+    key(play, pygame.K_m)
+    assert ids(menu.favourites)[-1] == "coal:coal" and play.message == "coal is favourite 10: keys 1-9 give the first 9"
+    key(play, pygame.K_1)
+    key(play, pygame.K_m)
+    assert play.message == "sand is no longer a favourite" and ids(menu.favourites)[:2] == ["water:water", "base:stone"]
+    key(play, pygame.K_9)
+    assert ids([play.brush.element]) == ["coal:coal"]  # tenth, now ninth
+    find(play, "coal")
+    key(play, pygame.K_m)
+    key(play, pygame.K_1)
+    assert "coal:coal" not in ids(menu.favourites) and ids([play.brush.element]) == ["water:water"]
+    Path("mods").mkdir()  # a reload keeps them, and the section shown
+    Path("mods/goo.toml").write_text(GOO)
+    assert menu.current().name == "liquids"  # water is not among the powders shown after coal was found
+    key(play, pygame.K_TAB)
+    pinned = ids(menu.favourites)
+    play.reload()
+    assert play.message == "mods reloaded" and ids(play.menu.favourites) == pinned and play.menu.current().name == "gases"
+    liquids = next(s.elements for s in play.menu.sections if s.name == "liquids")
+    assert play.session.world.ruleset.index("goo") in liquids
+
+
+SECTIONS = ("metals", "plants", "machines", "food", "minerals", "weather", "space", "favourites", "tools", "found")  # the last two: tabs apart from the menu's own
+FIELDS = {"powder": "density = 1500", "liquid": "density = 1000\ndispersion = 2", "gas": "density = 0.5\ndispersion = 2", "static": ""}
+#: 20 packs of 25 elements, 500 in all, once the loader takes them (at most MAX_ELEMENTS, now 256: 10 each till then).
+PACKS, PER_PACK = 20, 25 if MAX_ELEMENTS > 530 else 10
+
+
+def mod_packs(folder: Path, packs: int, per_pack: int) -> None:
+    """Mod packs, as a user installs them: ``packs`` mod files of ``per_pack`` elements each, of every
+    archetype, some in sections of their own, some hidden, some with long names."""
+    folder.mkdir()
+    for pack in range(packs):
+        text = f'[mod]\nname = "pack{pack:02d}"\n'
+        for n in range(per_pack):
+            archetype = tuple(FIELDS)[n % 4]
+            name = f"p{pack:02d}_{archetype}_{n}{'_with_a_long_name' if n % 7 == 3 else ''}"
+            colour = f"#{pack * 53 % 256:02x}{n * 97 % 256:02x}{pack * n * 31 % 256:02x}"
+            text += f'\n[elements.{name}]\narchetype = "{archetype}"\ncolor = "{colour}"\n{FIELDS[archetype]}\n'
+            text += f'category = "{SECTIONS[(pack + n) % len(SECTIONS)]}"\n' if n % 5 == 1 else ""
+            text += "hidden = true\n" if n % 11 == 10 else ""
+        (folder / f"pack{pack:02d}.toml").write_text(text)
+
+
+def test_with_hundreds_of_elements_each_is_reached_by_tab_page_and_swatch_and_by_search():
+    mod_packs(Path("mods"), PACKS, PER_PACK)
+    play = Play(Session.open(None, size=(40, 30)), scale=SCALE, fixed_steps=1)
+    ruleset, menu = play.session.world.ruleset, play.menu
+    generated = [e for e in offered(ruleset) if ruleset.elements[e].mod.startswith("pack")]
+    assert len(generated) == PACKS * PER_PACK and len(menu.tabs()) == 1 + 4 + 2 + len(SECTIONS)  # more than a row holds
+    reached = set()
+    for _ in menu.tabs():
+        actions = [action for _, action in play.view.menu_items(menu)]
+        assert ("section", menu.current().name) in actions  # its tab, scrolled into the row
+        for page in range(menu.pages()):
+            assert menu.page == page
+            for rect, (kind, element) in play.view.menu_items(menu):
+                if kind == "element":
+                    click(play, rect)
+                    assert play.brush.element == element and menu.page == page
+                    reached.add(element)
+            click(play, rect_of(play, "page", 1))
+        click(play, rect_of(play, "sections", 1))
+    assert menu.current().name == FAVOURITES and reached == set(listed(ruleset))
+    hidden = set(offered(ruleset)) - reached
+    assert len(hidden) == PACKS * (PER_PACK // 11) and all(ruleset.elements[e].spec.hidden for e in hidden)
+    for element in offered(ruleset):  # the hidden ones too
+        find(play, ruleset.elements[element].id)
+        assert play.brush.element == element, ruleset.elements[element].id
+
+
+def test_without_the_bundled_elements_the_favourites_are_the_first_of_each_section():
+    mod_packs(Path("mods"), 2, 10)
+    Path("w.toml").write_text('[world]\nwidth = 40\nheight = 30\nmods = ["pack00", "pack01"]\n')
+    play = Play(Session.open(Path("w.toml")), scale=SCALE, fixed_steps=1)
+    ruleset, menu = play.session.world.ruleset, play.menu
+    favourites = [ruleset.elements[e] for e in menu.favourites]
+    assert menu.favourites[0] == play.brush.element and favourites[0].id == "pack00:p00_powder_0"
+    assert "base:stone" in [e.id for e in favourites] and len(favourites) == KEYED
+    assert {s.elements[0] for s in menu.sections} <= set(menu.favourites) and not any(e.spec.hidden for e in favourites)
+
+
+def test_contrast_picks_the_ink_that_reads_on_any_swatch():
+    for rgb in np.ndindex(9, 9, 9):
+        back = tuple(min(255, c * 32) for c in rgb)
+        assert contrast(ink(back), back) >= 4.5, back
 
 
 def test_consecutive_moves_of_one_stroke_on_a_frame_are_one_event():

@@ -52,6 +52,13 @@ HexColor = Annotated[
     Field(pattern=r"^#[0-9a-fA-F]{6}$", description="A colour as #rrggbb."),
 ]
 
+#: The menu section (in ``sandmod play``) of an element that names no ``category``: by its archetype.
+ARCHETYPE_CATEGORIES = {"empty": "empty", "static": "solids", "powder": "powders", "liquid": "liquids", "gas": "gases", "particle": "particles"}
+_CATEGORY = (
+    "Which section of the element menu in 'sandmod play' shows it: a lower-case name ('explosives', 'life'); "
+    "without it, by its archetype: " + ", ".join(f"{a} '{c}'" for a, c in ARCHETYPE_CATEGORIES.items() if a != "empty") + "."
+)
+
 EMPTY_ID = "base:empty"
 #: The particle element a launched cell becomes (it carries the cell's element).
 PARTICLE_ID = "base:particle"
@@ -254,6 +261,12 @@ class _ElementBase(_Strict):
         description="Per-cell brightness variation (0 = flat colour, 0.5 = very grainy).",
     )
     tags: list[Tag] = Field(default_factory=list, description="Tags that reaction selectors ('#tag') match.")
+    category: Tag | None = Field(None, description=_CATEGORY, examples=["explosives"])
+    hidden: bool = Field(
+        False,
+        description="Leave it out of the element menu in 'sandmod play' (a search there still finds it): for intermediate forms a player need not paint.",
+        examples=[True],
+    )
     lifetime: Lifetime | None = Field(None, description="Turn into another element after a while.")
     override: bool = Field(
         False,
@@ -302,6 +315,11 @@ class _ElementBase(_Strict):
         if self.explosion is not None and self.flammable is None:
             raise ValueError("an explosive element needs 'flammable' (ignites_at, catch_chance) to say when it goes off")
         return self
+
+    @property
+    def menu_category(self) -> str:
+        """The menu section it is shown in: its ``category``, else its archetype's."""
+        return self.category or ARCHETYPE_CATEGORIES[self.archetype]
 
     @field_validator("color")
     @classmethod

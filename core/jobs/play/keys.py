@@ -25,7 +25,7 @@ BINDINGS = (
     Binding((), "", "paint; shift: a line from the last point", "left button"),
     Binding((), "", "erase", "right button"),
     Binding((), "", "pick the element under the cursor", "middle button"),
-    Binding((), "", "brush size; ctrl: zoom at the cursor", "wheel"),
+    Binding((), "", "brush size; ctrl: zoom; menu: pages", "wheel"),
     Binding(("[", "]"), "size", "brush size"),
     Binding(("b",), "square", "round or square brush"),
     Binding(("r",), "replace", "replace mode: over one element only"),
@@ -34,8 +34,12 @@ BINDINGS = (
     Binding(("q",), "spray", "spray the element, while held"),
     Binding(("f",), "fling", "fling cells as particles, while held"),
     Binding(("x",), "explode", "explode at the cursor"),
-    Binding(tuple("123456789"), "choose", "choose an element (or click the bar)", "1-9"),
-    Binding(("/",), "search", "find an element by name, then enter"),
+    Binding(tuple("123456789"), "choose", "a favourite (or click the menu)", "1-9"),
+    Binding(("m",), "pin", "pin or unpin as a favourite"),
+    Binding(("tab", "shift+tab"), "section", "menu: next section (shift: back)", "tab"),
+    Binding((",", "."), "element", "menu: element before, after", ", ."),
+    Binding(("page up", "page down"), "page", "menu: page before, after", "page up, down"),
+    Binding(("/",), "search", "find by name, then enter"),
     Binding(("space",), "pause", "pause or go on"),
     Binding(("n",), "step", "one step"),
     Binding(("=", "+", "[+]", "-", "[-]"), "speed", "faster, slower", "+ -"),
@@ -49,7 +53,7 @@ BINDINGS = (
     Binding(("p",), "screenshot", "screenshot of the window (PNG)"),
     Binding(("g",), "capture", "GIF of the last 10 seconds"),
     Binding(("f1", "?"), "help", "this help"),
-    Binding(("escape",), "quit", "quit (asks if the session is not saved)"),
+    Binding(("escape",), "quit", "quit (asks if not saved)"),
 )
 
 #: Commands repeated every step while their key is held.

@@ -6,7 +6,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ...formats.modspec import ARCHETYPES
 from ...rules.compiler import Ruleset
 
 MAX_BRUSH = 64
@@ -57,18 +56,10 @@ def blast(brush: Brush, at: tuple[int, int]) -> Event:
     return "explode", {"at": list(at), "radius": max(brush.size, 4), "strength": 20.0}
 
 
-def bar_order(ruleset: Ruleset) -> list[int]:
-    """The elements the bar offers, grouped by archetype (static, powder, liquid, gas, particle
-    elements), then by name."""
-    rank = {name: number for number, name in enumerate(ARCHETYPES)}
-    chosen = [e for e in ruleset.elements[1:] if e.index != ruleset.particle]
-    return [e.index for e in sorted(chosen, key=lambda e: (rank.get(e.spec.archetype, len(rank)), e.name, e.id))]
-
-
 def default_element(ruleset: Ruleset, offered: list[int], named: list[str] | None = None) -> int:
     """What a first stroke paints: sand; else the first of the mods the world names (``named``, in its
     order; None: every mod loaded) whose namesake element (``lava:lava``) is a powder or liquid; else
-    the first powder, else the first liquid, of those mods, in the bar's order; else the first powder
+    the first powder, else the first liquid, of those mods, in the menu's order; else the first powder
     or liquid offered; else the first element offered."""
     try:
         return ruleset.index("sand:sand")
@@ -80,7 +71,7 @@ def default_element(ruleset: Ruleset, offered: list[int], named: list[str] | Non
             return namesake[0]
     order = {name: number for number, name in enumerate(named or [])}
     mods = [e for e in offered if named is None or ruleset.elements[e].mod in order]
-    mods.sort(key=lambda e: order.get(ruleset.elements[e].mod, 0))  # stable: the bar's order within a mod
+    mods.sort(key=lambda e: order.get(ruleset.elements[e].mod, 0))  # stable: the menu's order within a mod
     for candidates in (mods, offered):
         for archetype in ("powder", "liquid"):
             found = [e for e in candidates if ruleset.elements[e].spec.archetype == archetype]
@@ -91,7 +82,7 @@ def default_element(ruleset: Ruleset, offered: list[int], named: list[str] | Non
 
 def search(ruleset: Ruleset, offered: list[int], text: str) -> list[int]:
     """Elements whose id holds ``text``: the exact name first, then names that start with it, then
-    ids that do, then the rest, each in the bar's order."""
+    ids that do, then the rest, each in the menu's order."""
     text = text.strip().lower()
     if not text:
         return []

@@ -1,5 +1,5 @@
-"""The window's picture: the world through a viewport, the element bar, the status line, the brush
-outline and the overlays (problems, help, a tooltip).
+"""The window's picture: the world through a viewport, the element menu (:mod:`.menu`) and the
+status line below it, the brush outline and the overlays (problems, help).
 
 The view owns what is stale on the screen. The world records every chunk that changed since it was
 last drawn, whatever changed it (steps, strokes, blasts, undo, a snapshot); a new world (after an
@@ -15,18 +15,47 @@ import numpy as np
 
 from ...world.world import World
 from .keys import help_lines
+from .menu import FAVOURITES, KEYED, Menu
 
-BAR = 28  # the element bar's height, in pixels
+TAB = 20  # the height of the menu's row of section tabs, in pixels
+SLOT = (94, 20)  # an element's labelled swatch in the menu, with its frame
+ROWS = 3  # rows of swatches on a page of the menu
+ARROW = 18  # the width of a < or > button
+PAGER = 2 * ARROW + 8  # right of the swatches: the page number over the page buttons
+MENU = TAB + ROWS * SLOT[1] + 6  # the menu's height
 STATUS = 20  # the status line's
-SWATCH = 24  # the widest an element's swatch in the bar gets
-GAP = 6  # between the bar's groups
-MIN_WIDTH = 640  # room for the element bar and the status line
+MIN_WIDTH = 640  # room for six swatches a row and the status line
 MIN_HEIGHT = 280  # room for the help
 MAX_AREA = (1280, 800)  # the most of the screen the world takes; a larger one is seen through a viewport
 LINE = 16  # a line of text's height, in pixels
 MARGIN = 6  # between text and the window's edges
-TEXT, DIM, RED = (225, 225, 225), (150, 150, 160), (255, 120, 100)
-PANEL, PROBLEM_BACK = (24, 24, 28), (20, 10, 10)
+TEXT, DIM, RED, KEYS = (225, 225, 225), (150, 150, 160), (255, 120, 100), (255, 220, 120)
+PANEL, PROBLEM_BACK, BUTTON = (24, 24, 28), (20, 10, 10), (52, 52, 62)
+CHOSEN, TAKEN = (255, 255, 255), KEYS  # the frames of the brush's element and of what enter takes
+
+
+def luminance(rgb) -> float:
+    """The relative luminance of an sRGB colour (WCAG 2), 0 to 1."""
+    linear = [v / 12.92 if v <= 0.04045 else ((v + 0.055) / 1.055) ** 2.4 for v in (c / 255 for c in rgb)]
+    return 0.2126 * linear[0] + 0.7152 * linear[1] + 0.0722 * linear[2]
+
+
+def contrast(a, b) -> float:
+    """The WCAG contrast ratio of two colours, 1 to 21."""
+    light, dark = sorted((luminance(a), luminance(b)), reverse=True)
+    return (light + 0.05) / (dark + 0.05)
+
+
+def ink(back) -> tuple[int, int, int]:
+    """Black or white, whichever reads better on ``back`` (at least 4.5:1, WCAG's bar for text)."""
+    return max(((0, 0, 0), (255, 255, 255)), key=lambda colour: contrast(colour, back))
+
+
+def fit(font, text: str, width: int) -> str:
+    """``text``, cut short with an ellipsis if it is wider than ``width`` pixels in ``font``."""
+    while len(text) > 1 and font.size(text)[0] > width:
+        text = text[:-2] + "…"
+    return text
 
 
 def wrap(font, text: str, width: int) -> list[str]:
@@ -57,9 +86,8 @@ class Overlay:
     problems: list[str] = field(default_factory=list)
     prompt: str = ""  # a question the next key answers, in place of the message
     help: bool = False
-    bar: list[int] = field(default_factory=list)  # the elements offered, in order
-    chosen: int = 0
-    matches: set[int] = field(default_factory=set)
+    menu: Menu | None = None
+    chosen: int = 0  # the brush's element
     brush: tuple[int, bool] | None = None  # (size, square) under the cursor; None: no outline
 
 
@@ -68,7 +96,7 @@ class View:
         self.pg = pygame
         self.scale = scale
         self.area = (max(min(world.width * scale, MAX_AREA[0]), MIN_WIDTH), max(min(world.height * scale, MAX_AREA[1]), MIN_HEIGHT))
-        self.size = (self.area[0], self.area[1] + BAR + STATUS)
+        self.size = (self.area[0], self.area[1] + MENU + STATUS)
         self.screen = pygame.display.set_mode(self.size)
         pygame.display.set_caption("sandmod")
         self.font = pygame.font.Font(None, 17)
@@ -152,25 +180,54 @@ class View:
             self.corner = [cell[0] - (pos[0] - left) // self.scale, cell[1] - (pos[1] - top) // self.scale]
         self.pan(0, 0)
 
-    def bar_slots(self, elements: list[int]) -> list[tuple[int, int, int]]:
-        """(left, width, element) of each swatch in the bar: groups of one archetype apart."""
-        archetypes = [self.world.ruleset.elements[e].spec.archetype for e in elements]
-        groups = len(set(archetypes))
-        width = int(np.clip((self.size[0] - GAP * groups) // max(len(elements), 1), 6, SWATCH))
-        slots, left = [], 2
-        for number, element in enumerate(elements):
-            if number and archetypes[number] != archetypes[number - 1]:
-                left += GAP
-            if left + width > self.size[0]:
-                break
-            slots.append((left, width, element))
-            left += width
-        return slots
+    def per_page(self) -> int:
+        """How many swatches a page of the menu holds."""
+        return self._columns() * ROWS
 
-    def bar_element_at(self, pos, elements: list[int]) -> int | None:
-        if not (self.area[1] <= pos[1] < self.area[1] + BAR):
+    def _columns(self) -> int:
+        return max(1, (self.size[0] - 4 - PAGER) // SLOT[0])
+
+    def in_menu(self, pos) -> bool:
+        return self.area[1] <= pos[1] < self.area[1] + MENU
+
+    def menu_items(self, menu: Menu) -> list[tuple[tuple[int, int, int, int], tuple[str, object]]]:
+        """Each thing in the menu that a click does something on: its rectangle, and the action,
+        ("section", name), ("sections", -1 or 1), ("page", -1 or 1) or ("element", element)."""
+        top, right = self.area[1], self.size[0]
+        items = self._tabs(menu)
+        items += [((right - 2 * ARROW - 2, top + 2, ARROW - 2, TAB - 4), ("sections", -1)), ((right - ARROW - 2, top + 2, ARROW - 2, TAB - 4), ("sections", 1))]
+        columns, grid = self._columns(), top + TAB + 2
+        for number, element in enumerate(menu.on_page()):
+            row, column = divmod(number, columns)
+            items.append(((2 + column * SLOT[0], grid + row * SLOT[1], *SLOT), ("element", element)))
+        pager = right - PAGER
+        items += [((pager, grid + SLOT[1], ARROW, SLOT[1] - 2), ("page", -1)), ((pager + ARROW + 4, grid + SLOT[1], ARROW, SLOT[1] - 2), ("page", 1))]
+        return items
+
+    def _tabs(self, menu: Menu) -> list[tuple[tuple[int, int, int, int], tuple[str, object]]]:
+        """The tabs that fit left of the < > buttons: from the first, or from one far enough on
+        that the section shown is among them."""
+        tabs = menu.tabs()
+        widths = [self.font.size(_tab_label(s))[0] + 14 for s in tabs]
+        room = self.size[0] - 2 * ARROW - 8
+        shown = [s.name for s in tabs].index(menu.current().name)
+        first = 0
+        while first < shown and sum(widths[first : shown + 1]) > room:
+            first += 1
+        items, left = [], 2
+        for section, width in zip(tabs[first:], widths[first:]):
+            if left + width > room:
+                break
+            items.append(((left, self.area[1] + 2, width - 2, TAB - 2), ("section", section.name)))
+            left += width
+        return items
+
+    def menu_at(self, pos, menu: Menu) -> tuple[str, object] | None:
+        """What a click at ``pos`` does in the menu (see :meth:`menu_items`); None: nothing there."""
+        if not self.in_menu(pos):
             return None
-        return next((e for left, width, e in self.bar_slots(elements) if left <= pos[0] < left + width), None)
+        inside = lambda r: r[0] <= pos[0] < r[0] + r[2] and r[1] <= pos[1] < r[1] + r[3]  # noqa: E731
+        return next((action for rect, action in self.menu_items(menu) if inside(rect)), None)
 
     # --- drawing ----------------------------------------------------------------------------
 
@@ -180,7 +237,7 @@ class View:
         if overlay.brush is not None:
             self._outline(mouse, *overlay.brush)
         self._problems(overlay.problems)
-        self._bar(overlay)
+        self._menu(overlay)
         self._status(overlay)
         self._tooltip(overlay, mouse)
         if overlay.help:
@@ -227,20 +284,52 @@ class View:
         for number, line in enumerate(lines[: (self.area[1] - MARGIN) // LINE]):
             self._text(line, (MARGIN, MARGIN + number * LINE), RED, back=PROBLEM_BACK)
 
-    def _bar(self, overlay: Overlay) -> None:
-        pygame, top = self.pg, self.area[1]
-        pygame.draw.rect(self.screen, PANEL, (0, top, self.size[0], BAR + STATUS))
-        for left, width, element in self.bar_slots(overlay.bar):
-            colour = self.world.ruleset.swatch(element)
-            pygame.draw.rect(self.screen, colour, (left + 1, top + 3, width - 2, BAR - 6))
-            if element == overlay.chosen or element in overlay.matches:
-                pygame.draw.rect(self.screen, (255, 255, 255), (left, top + 1, width, BAR - 2), 2)
+    def _menu(self, overlay: Overlay) -> None:
+        """The tabs, the page of swatches shown, and the page buttons."""
+        menu, top = overlay.menu, self.area[1]
+        self.pg.draw.rect(self.screen, PANEL, (0, top, self.size[0], MENU + STATUS))
+        if menu is None:
+            return
+        names = {s.name: s for s in menu.tabs()}
+        ends = {"sections": (True, True), "page": (menu.page > 0, menu.page < menu.pages() - 1)}
+        for rect, (kind, what) in self.menu_items(menu):
+            if kind == "section":
+                shown = what == menu.current().name
+                self.pg.draw.rect(self.screen, BUTTON if shown else PANEL, rect, border_radius=3)
+                self._text(_tab_label(names[what]), (rect[0] + 7, rect[1] + 4), KEYS if what == FAVOURITES else TEXT if shown else DIM)
+            elif kind == "element":
+                self._swatch(rect, what, overlay, menu)
+            else:
+                self._button(rect, "<" if what < 0 else ">", ends[kind][what > 0])
+        page = f"{min(menu.page, menu.pages() - 1) + 1}/{menu.pages()}"
+        self._text(page, (self.size[0] - PAGER + (PAGER - self.font.size(page)[0]) // 2, top + TAB + 6), DIM)
+
+    def _swatch(self, rect, element: int, overlay: Overlay, menu: Menu) -> None:
+        """An element's swatch with its name on it (its key's number before it, among the favourites);
+        framed if the brush has it, or if enter takes it."""
+        left, top, width, height = rect
+        colour = self.world.ruleset.swatch(element)
+        name = self.world.ruleset.elements[element].name
+        if menu.current().name == FAVOURITES and menu.favourites.index(element) < KEYED:
+            name = f"{menu.favourites.index(element) + 1} {name}"
+        taken = menu.found[0] if menu.found and menu.current().elements is menu.found else None
+        frame = CHOSEN if element == overlay.chosen else TAKEN if element == taken else None
+        if frame is not None:
+            self.pg.draw.rect(self.screen, frame, rect, 2)
+        self.pg.draw.rect(self.screen, colour, (left + 2, top + 2, width - 4, height - 4))
+        label = self.font.render(fit(self.font, name, width - 10), True, ink(colour))
+        self.screen.blit(label, (left + 5, top + (height - label.get_height()) // 2))
+
+    def _button(self, rect, text: str, enabled: bool) -> None:
+        self.pg.draw.rect(self.screen, BUTTON, rect, border_radius=3)
+        width, height = self.font.size(text)
+        self._text(text, (rect[0] + (rect[2] - width) // 2, rect[1] + (rect[3] - height) // 2), TEXT if enabled else DIM)
 
     def _status(self, overlay: Overlay) -> None:
         """The status line; the message (or prompt) after it if it fits there, else wrapped in lines
         over the bottom of the world, the whole of it readable."""
         said, colour = (overlay.prompt, RED) if overlay.prompt else (overlay.message, TEXT)
-        row = self.area[1] + BAR + 3
+        row = self.area[1] + MENU + 3
         status = self._text(overlay.status, (MARGIN, row))
         gap = self.font.size("   ")[0] if overlay.status else 0
         if status.right + gap + self.font.size(said)[0] <= self.size[0] - MARGIN:
@@ -251,13 +340,15 @@ class View:
         self.said = [(line, self._text(line, (MARGIN, top + number * LINE), colour, back=PANEL)) for number, line in enumerate(lines)]
 
     def _tooltip(self, overlay: Overlay, mouse) -> None:
-        element = self.bar_element_at(mouse, overlay.bar)
-        if element is None:
+        """Over the status line, what the swatch under the mouse is: its id, archetype, mod and section."""
+        action = self.menu_at(mouse, overlay.menu) if overlay.menu is not None else None
+        if action is None or action[0] != "element":
             return
-        info = self.world.ruleset.elements[element]
-        text = f"{info.name}  ({info.spec.archetype}, mod {info.mod})"
-        width = self.font.size(text)[0]
-        self._text(text, (int(np.clip(mouse[0] - width // 2, 4, self.size[0] - width - 4)), self.area[1] - 18), back=(40, 40, 48))
+        info = self.world.ruleset.elements[action[1]]
+        spec = info.spec
+        row = self.area[1] + MENU
+        self.pg.draw.rect(self.screen, PANEL, (0, row, self.size[0], STATUS))
+        self._text(f"{info.id}   {spec.archetype}, mod {info.mod}, in {spec.menu_category}", (MARGIN, row + 3))
 
     def _help(self) -> None:
         pygame = self.pg
@@ -272,7 +363,9 @@ class View:
         for number, (keys, what) in enumerate(lines):
             left = 12 + (number // per_column) * column
             top = 30 + (number % per_column) * 16
-            self._text(keys, (left, top), (255, 220, 120))
-            while what and self.font.size(what)[0] > column - keys_width - 16:
-                what = what[:-2] + "…"[: len(what) > 1]
-            self._text(what, (left + keys_width, top), TEXT)
+            self._text(keys, (left, top), KEYS)
+            self._text(fit(self.font, what, column - keys_width - 16), (left + keys_width, top), TEXT)
+
+
+def _tab_label(section) -> str:
+    return f"{section.name} {len(section.elements)}"

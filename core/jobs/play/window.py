@@ -22,6 +22,7 @@ from ...formats.worldspec import MAX_FRAMES
 from ..session import Session
 from . import keys, tools
 from .files import Capture, folders, save_png, write_somewhere
+from .menu import KEYED, Menu, default_favourites, listed, offered
 from .view import Overlay, View
 
 TICKS = 60  # simulation steps a second at speed 1
@@ -58,8 +59,10 @@ class Play:
         self.fixed_steps = fixed_steps  # steps per displayed frame regardless of time (tests and --benchmark)
         self.save_on_exit = save_on_exit  # write the session's world file when the window closes
         self.view = View(pygame, session.world, scale)
-        self.bar = tools.bar_order(session.world.ruleset)
+        ruleset = session.world.ruleset
+        self.offered = offered(ruleset)  # what a search finds
         self.brush = tools.Brush(self._default_element())
+        self.menu = Menu(ruleset, self.view.per_page(), default_favourites(ruleset, self.brush.element))
         self.paused, self.speed, self.help, self.running = False, 1.0, False, True
         self.message, self.message_at, self.prompt = "", 0.0, ""
         self.problems: list[str] = []
@@ -129,9 +132,8 @@ class Play:
             self.captured.append(view.pixels.copy())
         self.phases.pixels += time.perf_counter() - began
         began = time.perf_counter()
-        matches = set(self._matches()) if self.search else set()
         brush = (self.brush.size, self.brush.square) if not self.help else None
-        overlay = Overlay(self._status(), self._message(), self.problems, self.prompt, self.help, self.bar, self.brush.element, matches, brush)
+        overlay = Overlay(self._status(), self._message(), self.problems, self.prompt, self.help, self.menu, self.brush.element, brush)
         view.draw(overlay, self.pg.mouse.get_pos())
         self.phases.blit += time.perf_counter() - began
 
@@ -155,7 +157,9 @@ class Play:
         if self.problems:
             return
         ruleset = self.session.world.ruleset
-        self.bar = tools.bar_order(ruleset)
+        self.offered, self.menu = offered(ruleset), self.menu.reloaded(ruleset)
+        if self.search is not None:
+            self.menu.find(self._matches())
         try:
             self.brush.element = ruleset.index(chosen)
         except KeyError:
@@ -163,7 +167,8 @@ class Play:
         self.say("mods reloaded")
 
     def _default_element(self) -> int:
-        return tools.default_element(self.session.world.ruleset, self.bar, self.session.loaded.spec.world.mods)
+        ruleset = self.session.world.ruleset
+        return tools.default_element(ruleset, listed(ruleset), self.session.loaded.spec.world.mods)
 
     # --- input ----------------------------------------------------------------------------------
 
@@ -180,6 +185,8 @@ class Play:
                 self._button_down(event)
             elif event.type == pygame.MOUSEBUTTONUP and event.button in (1, 3):
                 self.stroke, self.last_cell = None, self.view.cell_at(event.pos) or self.last_cell
+            elif event.type == pygame.MOUSEWHEEL and self.view.in_menu(pygame.mouse.get_pos()):
+                self.menu.turn(-event.y)
             elif event.type == pygame.MOUSEWHEEL and pygame.key.get_mods() & pygame.KMOD_CTRL:
                 self.view.zoom(event.y, pygame.mouse.get_pos())
             elif event.type == pygame.MOUSEWHEEL:
@@ -195,6 +202,8 @@ class Play:
         name = pygame.key.name(event.key)
         if event.mod & pygame.KMOD_CTRL:
             name = f"ctrl+{name}"
+        elif event.mod & pygame.KMOD_SHIFT and keys.command(f"shift+{name}"):
+            name = f"shift+{name}"
         command = keys.command(name, event.unicode or "")
         if self.prompt:  # the question of quitting: s saves and quits, escape quits, anything else stays
             self.prompt = ""
@@ -208,9 +217,10 @@ class Play:
             getattr(self, f"do_{command}")(name)
 
     def _button_down(self, event) -> None:
-        element = self.view.bar_element_at(event.pos, self.bar)
-        if element is not None:
-            self.brush.element = element
+        if self.view.in_menu(event.pos):
+            action = self.view.menu_at(event.pos, self.menu)
+            if action is not None:
+                self._menu_click(*action)
             return
         cell = self.view.cell_at(event.pos)
         if cell is None:
@@ -226,6 +236,23 @@ class Play:
         start = self.last_cell if (self.pg.key.get_mods() & self.pg.KMOD_SHIFT) and self.last_cell else cell
         self._apply(start, cell)
         self.last_cell = cell
+
+    def _menu_click(self, kind: str, what) -> None:
+        """A click on the menu: on a swatch, a tab, or a < > button (see :meth:`.View.menu_items`)."""
+        if kind == "element":
+            self._take(what)
+        elif kind == "section":
+            self.menu.show(what)
+        elif kind == "sections":
+            self.menu.next_section(what)
+        else:
+            self.menu.turn(what)
+
+    def _take(self, element: int) -> None:
+        """The brush takes ``element`` (a search ends), and the menu shows it."""
+        self.brush.element = element
+        self._end_search()
+        self.menu.reveal(element)
 
     def _drag(self, pos) -> None:
         cell = self.view.cell_at(pos)
@@ -265,21 +292,27 @@ class Play:
     def _search_key(self, event) -> None:
         pygame = self.pg
         if event.key == pygame.K_ESCAPE:
-            self.search = None
+            self._end_search()
         elif event.key == pygame.K_RETURN:
             found = self._matches()
             if found:
-                self.brush.element = found[0]
+                self._take(found[0])
             else:
                 self.say(f"no element's name holds '{self.search}'")
-            self.search = None
+                self._end_search()
         elif event.key == pygame.K_BACKSPACE:
             self.search = self.search[:-1]
         elif event.unicode and event.unicode.isprintable():
             self.search += event.unicode.lower()
+        if self.search is not None:
+            self.menu.find(self._matches())
+
+    def _end_search(self) -> None:
+        self.search = None
+        self.menu.find(None)
 
     def _matches(self) -> list[int]:
-        return tools.search(self.session.world.ruleset, self.bar, self.search or "")
+        return tools.search(self.session.world.ruleset, self.offered, self.search or "")
 
     # --- commands (see keys.BINDINGS) ------------------------------------------------------------
 
@@ -319,12 +352,30 @@ class Play:
             self._add(tools.blast(self.brush, cell))
 
     def do_choose(self, key: str) -> None:
-        number = int(key) - 1
-        if number < len(self.bar):
-            self.brush.element = self.bar[number]
+        element = self.menu.favourite(int(key))
+        if element is not None:
+            self._take(element)
+
+    def do_pin(self, key: str) -> None:
+        name = self.session.world.ruleset.elements[self.brush.element].name
+        if not self.menu.pin(self.brush.element):
+            self.say(f"{name} is no longer a favourite")
+            return
+        number = len(self.menu.favourites)
+        self.say(f"{name} is favourite {number}: " + (f"key {number} gives it" if number <= KEYED else f"keys 1-{KEYED} give the first {KEYED}"))
+
+    def do_section(self, key: str) -> None:
+        self.menu.next_section(-1 if key.startswith("shift+") else 1)
+
+    def do_element(self, key: str) -> None:
+        self.brush.element = self.menu.next_element(self.brush.element, -1 if key == "," else 1)
+
+    def do_page(self, key: str) -> None:
+        self.menu.turn(-1 if key == "page up" else 1)
 
     def do_search(self, key: str) -> None:
         self.search = ""
+        self.menu.find([])
 
     def do_pause(self, key: str) -> None:
         self.paused = not self.paused
