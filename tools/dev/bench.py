@@ -17,8 +17,9 @@ their rules differ. ``in-turns`` does the same for the ``--threads`` counts,
 and checks that every count steps to the same frames. ``yardstick`` times the
 kernel with the yardstick (:mod:`yardstick`) on each ``--threads`` count: what
 this machine allows at the time, the kernel's speed as a share of it, and what
-more threads give each of them. ``loaded`` times a scene with only sand's
-and water's mods loaded against the same scene with generated packs
+more threads give each of them. ``loaded`` times a scene with only the mods
+it paints with loaded (sand's and water's; the bundled ones for
+``everything``) against the same scene with generated packs
 (``packs.py``) loaded too, ``--elements`` in all: what loading many elements
 costs a world that uses few.
 """
@@ -213,7 +214,6 @@ def loaded(elements, scenes, worlds, size, steps, thread_counts, busy, as_json) 
     if worlds:
         raise click.UsageError("loaded times the built-in scenes (sand and water), not a --world")
     thread_counts = thread_counts or (1,)
-    few = load_ruleset(["sand", "water"])
     with tempfile.TemporaryDirectory() as folder:
         bundled = len(load_ruleset().elements)
         packs = max(1, -(-(elements - bundled) // 25))
@@ -223,6 +223,7 @@ def loaded(elements, scenes, worlds, size, steps, thread_counts, busy, as_json) 
     with benchmark.busy_processes(busy):
         for b, count in runs:
             cells = b.width * b.height * count / 1e6
+            few = load_ruleset(None if b.name == "everything" else ["sand", "water"])  # what the scene paints
             pair = [benchmark.scene_bench(ruleset, b.name, size) for ruleset in (few, many)]
             for threads in thread_counts:
                 try:
