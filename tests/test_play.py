@@ -181,7 +181,7 @@ def test_a_square_brush_paints_a_square():
 # --- the screen is the world -------------------------------------------------------------------
 
 def wrong_cells(play: Play) -> int:
-    """Cells whose colour on the screen is not the world's (``world.image()`` through the palette)."""
+    """Cells whose colour on the screen is not the world's (``world.rgb()``)."""
     view, world = play.view, play.session.world
     screen = pygame.surfarray.array3d(view.screen).transpose(1, 0, 2)
     left, top = view.origin()
@@ -191,7 +191,7 @@ def wrong_cells(play: Play) -> int:
     if view.heat_view:
         truth = world.heat_image()[y0 : y0 + rows, x0 : x0 + columns]
     else:
-        truth = view.palette[world.image()][y0 : y0 + rows, x0 : x0 + columns]
+        truth = world.rgb()[y0 : y0 + rows, x0 : x0 + columns]
     return int((shown != truth).any(axis=2).sum())
 
 
