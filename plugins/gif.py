@@ -91,7 +91,7 @@ def picture_entries(box: np.ndarray, in_global: np.ndarray, colours: np.ndarray)
     """A picture's pixels as colour table entries (uint8), and its local table (uint8 (entries, 3);
     None: the global one holds all its colours). ``in_global``: each colour index's global entry,
     PALETTE_SIZE for those it lacks."""
-    entries = in_global[box]
+    entries = np.take(in_global, box)  # faster than in_global[box]
     if entries.max() < PALETTE_SIZE:
         return entries.astype(np.uint8), None
     local = fit_palette([box], colours)

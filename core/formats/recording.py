@@ -250,7 +250,7 @@ class Palette:
 
     def indices(self, frame: np.ndarray) -> np.ndarray:
         """A frame's colour indices as entries of the palette, uint8."""
-        return self.lookup[frame]
+        return np.take(self.lookup, frame)
 
     def image(self, frame: np.ndarray):
         """A frame as a pillow image in mode ``P``."""
