@@ -555,8 +555,8 @@ class World:
         darker, and cells hotter than the glow point glow red, orange, then
         yellow. With ``changed_only``, only the chunks that may have changed
         since the last such call are drawn (``out`` holds the rest from then).
-        With ``rgb`` (uint8 (height, width, 3)), the cells drawn are written
-        there in colour too.
+        With ``rgb`` (uint8 (height, width, 3), or 4 with the last left
+        alone), the cells drawn are written there in colour too.
         """
         from ..engine import pixels
 

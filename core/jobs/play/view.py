@@ -85,8 +85,8 @@ class View:
         pygame = self.pg
         self.world = world
         self.pixels = np.zeros((world.height, world.width), np.uint16)  # the cells' colour indices (what a capture keeps)
-        self.rgb = np.zeros((world.height, world.width, 3), np.uint8)  # their colours
-        self.cells_surface = pygame.image.frombuffer(self.rgb, (world.width, world.height), "RGB")  # rgb's memory: no copy
+        self.rgb = np.zeros((world.height, world.width, 4), np.uint8)  # their colours, and a byte that 32-bit pixels scale faster with
+        self.cells_surface = pygame.image.frombuffer(self.rgb, (world.width, world.height), "RGBX")  # rgb's memory: no copy
         self.heat = np.zeros((world.height, world.width, 3), np.uint8)
         self.heat_surface = pygame.Surface((world.width, world.height), depth=24)
         self.everything = True
@@ -115,7 +115,7 @@ class View:
                 layer = painting.layer(world.cells)
                 shown = layer >= 0
                 self.pixels[shown] = world.ruleset.looks.normal[layer[shown], 0]
-                self.rgb[shown] = world.ruleset.colours[self.pixels[shown]]
+                self.rgb[shown, :3] = world.ruleset.colours[self.pixels[shown]]
 
     # --- where things are -------------------------------------------------------------------
 
