@@ -1,10 +1,12 @@
 """Output formats: what a recorder is, and writing its output atomically.
 
 A recorder receives finished frames (colour indices into the settings'
-``colours``, already cropped and scaled) and writes them to a path: a file, or for a recorder that writes a
-folder of images, a folder. sandmod hands it a temporary path beside the real
-output and renames it into place only when the recorder closes cleanly, so a
-failed or interrupted render never leaves a half-written output.
+``colours``, already cropped and scaled) and writes them to a path: a file,
+or for a recorder that writes a folder of images, a folder. Formats with
+palettes fit the frames' colours into 256 with :func:`fit_palette`. sandmod
+hands it a temporary path beside the real output and renames it into place
+only when the recorder closes cleanly, so a failed or interrupted render
+never leaves a half-written output.
 """
 
 from __future__ import annotations
