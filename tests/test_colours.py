@@ -152,3 +152,8 @@ def test_a_palette_is_exact_up_to_256_colours_and_the_nearest_of_the_most_common
     assert not palette.exact and len(palette.rgb) == 256
     assert palette.kept[:256].all() and not palette.kept[256:].any()  # the most common
     assert (palette.rgb[palette.indices(busy[:, :768])] == many[busy[:, :768]]).all()
+
+
+def test_the_colours_of_the_most_elements_a_ruleset_holds_fit_uint16_indices():
+    per_element = compiler.SHADES + compiler.SCORCHED_SHADES + len(compiler.GLOW_COLOURS)
+    assert compiler.SHADES + (compiler.MAX_ELEMENTS - 1) * per_element <= 2**16
