@@ -20,7 +20,7 @@ The public API is what this package gives (plugin authors: :mod:`sandmod.api`)::
     world.run(100)
     world.counts()                 # {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}
     world.temperature()            # degrees Celsius, (height, width)
-    world.image()                  # palette indices; world.rgb() for colours
+    world.image()                  # colour indices; world.rgb() for colours
     world.save_snapshot("hourglass.npz")
 
 Importing ``sandmod`` imports none of the modules (each name loads on first

@@ -16,12 +16,14 @@ from __future__ import annotations
 from .errors import Problem, ProblemsError
 from .hooks import Metric, ModLoader, hookimpl
 from .formats.modspec import Explosion
-from .formats.recording import Recorder, RecorderSpec, SavedAtClose, VideoSettings, palette_image, write_png
+from .formats.recording import PALETTE_SIZE, Palette, Recorder, RecorderSpec, SavedAtClose, VideoSettings, fit_palette, write_png
 from .formats.tomlsource import Loc, TomlSource
 from .world.world import State
 
 __all__ = [
     "Explosion",
+    "PALETTE_SIZE",
+    "Palette",
     "Loc",
     "Metric",
     "ModLoader",
@@ -33,7 +35,7 @@ __all__ = [
     "State",
     "TomlSource",
     "VideoSettings",
+    "fit_palette",
     "hookimpl",
-    "palette_image",
     "write_png",
 ]

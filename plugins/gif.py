@@ -1,15 +1,17 @@
-"""Built-in plugin: animated GIF output with one shared palette."""
+"""Built-in plugin: animated GIF output, written as the frames come: a global colour table of the
+first image's colours (then as many others of the settings' colours as fit, in order), and a local
+table for any picture with a colour not in it (exact where the picture holds at most 256 colours,
+the nearest of its 256 most common beyond)."""
 
 from __future__ import annotations
 
-import itertools
 import struct
 from pathlib import Path
-from typing import BinaryIO, Iterable, Iterator, Sequence
+from typing import Iterable, Iterator
 
 import numpy as np
 
-from sandmod.api import RecorderSpec, VideoSettings, hookimpl, palette_image
+from sandmod.api import PALETTE_SIZE, RecorderSpec, VideoSettings, fit_palette, hookimpl
 
 
 #: Browsers slow down GIF frames shorter than 20 ms, and delays are in 10 ms steps.
@@ -18,27 +20,6 @@ MIN_DELAY_MS = 20
 MAX_SIDE = 65535
 #: The longest delay one GIF image holds (in 10 ms steps, two bytes): longer runs of one picture take several.
 MAX_DELAY_MS = 65_530 * 10
-
-
-def distinct_colours(palette: bytes) -> bytes:
-    """The palette with repeated colours nudged by one unit, so every entry is distinct.
-
-    Pillow matches frame colours to a given palette by colour; repeats make
-    that slow and ambiguous. A change of one unit in one channel is invisible.
-    """
-    seen: set[tuple[int, int, int]] = set()
-    out = bytearray(palette)
-    for i in range(0, len(out), 3):
-        r, g, b = out[i : i + 3]
-        for dr, dg, db in itertools.product((0, 1, -1), repeat=3):  # (0, 0, 0) first
-            candidate = (min(max(r + dr, 0), 255), min(max(g + dg, 0), 255), min(max(b + db, 0), 255))
-            if candidate not in seen:
-                break
-        else:
-            candidate = next((v, v, v) for v in range(256) if (v, v, v) not in seen)
-        seen.add(candidate)
-        out[i : i + 3] = bytes(candidate)
-    return bytes(out)
 
 
 def gif_delay_ms(fps: float) -> int:
@@ -89,47 +70,63 @@ def changes(frames: Iterable[np.ndarray], delay_ms: int) -> Iterator[tuple[np.nd
     yield from pictures.finish()
 
 
-def gif_header(width: int, height: int, palette: bytes, loop: int | None) -> bytes:
-    """The GIF's screen, its global colour table (``palette``, 768 bytes) and, unless ``loop`` is
-    None, how often it repeats after the first play."""
-    header = b"GIF89a" + struct.pack("<HHBBB", width, height, 0xF7, 0, 0) + palette  # 0xF7: 256 colours, 8 bits a channel
+def colour_table(rgb: np.ndarray) -> tuple[int, bytes]:
+    """A GIF colour table of ``rgb`` (uint8 (entries, 3), at most 256): its size field (2 ** (size + 1)
+    entries) and its bytes, padded with black."""
+    size = max(0, (len(rgb) - 1).bit_length() - 1)
+    return size, rgb.tobytes().ljust(3 * 2 ** (size + 1), b"\0")
+
+
+def gif_header(width: int, height: int, rgb: np.ndarray, loop: int | None) -> bytes:
+    """The GIF's screen, its global colour table (``rgb``) and, unless ``loop`` is None, how often it
+    repeats after the first play."""
+    size, table = colour_table(rgb)
+    header = b"GIF89a" + struct.pack("<HHBBB", width, height, 0xF0 | size, 0, 0) + table  # 0xF0: a global table, 8 bits a channel
     if loop is not None:
         header += b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", loop) + b"\x00"
     return header
 
 
-def gif_picture(box: np.ndarray, x: int, y: int, ms: int, palette: bytes) -> bytes:
-    """One picture at (x, y), shown ``ms`` milliseconds; pillow encodes its pixels (LZW). The file
-    around them is written here, since pillow's own GIF writer keeps every frame until the end and
-    matches each one's colours to the palette again, in Python."""
-    from PIL import GifImagePlugin
+def picture_entries(box: np.ndarray, in_global: np.ndarray, colours: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """A picture's pixels as colour table entries (uint8), and its local table (uint8 (entries, 3);
+    None: the global one holds all its colours). ``in_global``: each colour index's global entry,
+    PALETTE_SIZE for those it lacks."""
+    entries = np.take(in_global, box)  # faster than in_global[box]
+    if entries.max() < PALETTE_SIZE:
+        return entries.astype(np.uint8), None
+    local = fit_palette([box], colours)
+    return local.indices(box), local.rgb
 
-    return b"".join(GifImagePlugin.getdata(palette_image(box, palette), offset=(x, y), duration=ms, disposal=1))
 
+def gif_picture(entries: np.ndarray, x: int, y: int, ms: int, local: np.ndarray | None) -> bytes:
+    """One picture at (x, y) (colour table entries), shown ``ms`` milliseconds, with its ``local``
+    colour table if any; pillow encodes its pixels (LZW). The file around them is written here,
+    since pillow's own GIF writer keeps every frame until the end and matches each one's colours
+    to the palette again, in Python."""
+    from PIL import GifImagePlugin, Image
 
-def write_gif(out: BinaryIO, frames: Sequence[np.ndarray], palette: bytes, delay_ms: int, loop: int | None) -> None:
-    """Write palette-index frames as an animated GIF: each picture cut to what changed, ``loop``
-    repeats after the first play (None: none)."""
-    height, width = frames[0].shape
-    out.write(gif_header(width, height, palette, loop))
-    for box, x, y, ms in changes(frames, delay_ms):
-        out.write(gif_picture(box, x, y, ms, palette))
-    out.write(b";")
+    image = Image.fromarray(entries, mode="P")
+    if local is not None:
+        image.putpalette(local.tobytes())
+    return b"".join(GifImagePlugin.getdata(image, offset=(x, y), duration=ms, disposal=1, include_color_table=local is not None))
 
 
 class GifRecorder:
-    """Palette frames as one animated GIF with a single global colour table, written as they come."""
+    """Frames as one animated GIF, written as they come (see the module's docstring)."""
 
     def __init__(self, path: Path, settings: VideoSettings):
-        self._palette = distinct_colours(settings.palette)
+        self._settings = settings
         self._pictures = Changes(gif_delay_ms(settings.fps))
-        plays = settings.loop  # GIF counts repeats after the first play; none: play once
         self._file = open(path, "wb")
-        self._file.write(gif_header(settings.width, settings.height, self._palette, None if plays == 1 else max(plays - 1, 0)))
+        self._in_global: np.ndarray | None = None  # per colour index: its global table entry, PALETTE_SIZE: none
         self.pictures = 0  # pictures written: images like the one before are merged into it
+        self.local_tables = 0  # of them, those with a colour table of their own
 
     def add_frame(self, frame: np.ndarray) -> None:
-        self._write(self._pictures.add(np.array(frame, dtype=np.uint8)))  # a copy: the caller may reuse its array
+        frame = np.array(frame, dtype=np.uint16)  # a copy: the caller may reuse its array
+        if self._in_global is None:
+            self._start(frame)
+        self._write(self._pictures.add(frame))
 
     def close(self) -> None:
         self._write(self._pictures.finish())
@@ -138,12 +135,28 @@ class GifRecorder:
         self._file.write(b";")
         self._file.close()
 
+    def _start(self, first: np.ndarray) -> None:
+        """The header, with the global table: the first image's colours, then others while there is room."""
+        settings, palette = self._settings, fit_palette([first], self._settings.colours)
+        spare = np.flatnonzero(~palette.kept)[: PALETTE_SIZE - len(palette.rgb)]
+        self._in_global = np.where(palette.kept, palette.lookup.astype(np.uint16), PALETTE_SIZE)
+        self._in_global[spare] = np.arange(len(palette.rgb), len(palette.rgb) + len(spare))
+        table = np.concatenate([palette.rgb, settings.colours[spare]])
+        plays = settings.loop  # GIF counts repeats after the first play; none: play once
+        self._file.write(gif_header(settings.width, settings.height, table, None if plays == 1 else max(plays - 1, 0)))
+
     def _write(self, pictures) -> None:
         for box, x, y, ms in pictures:
-            self._file.write(gif_picture(box, x, y, ms, self._palette))
+            entries, local = picture_entries(box, self._in_global, self._settings.colours)
+            self._file.write(gif_picture(entries, x, y, ms, local))
             self.pictures += 1
+            self.local_tables += local is not None
 
 
 @hookimpl
 def register_recorders(register):
-    register(RecorderSpec("gif", (".gif",), GifRecorder, "Animated GIF, one shared 256-colour palette.", max_side=MAX_SIDE))
+    register(
+        RecorderSpec(
+            "gif", (".gif",), GifRecorder, "Animated GIF: 256 colours a picture (the nearest of them beyond), streamed.", max_side=MAX_SIDE
+        )
+    )

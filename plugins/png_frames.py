@@ -14,7 +14,8 @@ NAME = "frame_{:05d}.png"
 
 
 class PngFramesRecorder:
-    """Writes each frame as it comes as an indexed PNG: frame_00000.png, frame_00001.png, ..."""
+    """Writes each frame as it comes as a PNG (indexed when it holds at most 256 colours, else RGB):
+    frame_00000.png, frame_00001.png, ..."""
 
     def __init__(self, folder: Path, settings: VideoSettings):
         self._folder = folder
@@ -22,7 +23,7 @@ class PngFramesRecorder:
         self._count = 0
 
     def add_frame(self, frame: np.ndarray) -> None:
-        write_png(self._folder / NAME.format(self._count), frame, self._settings.palette)
+        write_png(self._folder / NAME.format(self._count), frame, self._settings.colours)
         self._count += 1
 
     def close(self) -> None:
@@ -34,6 +35,6 @@ class PngFramesRecorder:
 def register_recorders(register):
     register(
         RecorderSpec(
-            "png-frames", (), PngFramesRecorder, "A folder of indexed PNGs, frame_00000.png on (outputs without an extension).", folder="frame_*.png"
+            "png-frames", (), PngFramesRecorder, "A folder of PNGs, frame_00000.png on (outputs without an extension).", folder="frame_*.png"
         )
     )

@@ -57,6 +57,12 @@ def write_mods(folder: Path, files: dict[str, str]) -> Path:
     return folder
 
 
+def walls_mod(name: str, count: int, more: str = "") -> str:
+    """A mod of ``count`` static elements (``e000`` on), each its own colour, and ``more`` (TOML)."""
+    walls = "".join(f'[elements.e{k:03d}]\narchetype = "static"\ncolor = "#{(k * 7919) % 0xFFFFFF:06x}"\nshade = 0.2\n\n' for k in range(count))
+    return f'[mod]\nname = "{name}"\n\n{more}\n{walls}'
+
+
 def make_world(ruleset: Ruleset, rows: list[str], legend: dict[str, str] = LEGEND, seed: int = 0) -> World:
     """A world painted from text rows, one character per cell."""
     world = World(ruleset, len(rows[0]), len(rows), seed)

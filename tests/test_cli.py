@@ -326,7 +326,7 @@ def gif_colour_tables(data: bytes) -> tuple[bool, int, int]:
     return bool(flags & 0x80), images, local
 
 
-def test_rendered_frames_share_one_global_palette():
+def test_rendered_frames_share_one_global_colour_table():
     Path("pour.toml").write_text(POURING.format(element="sand"))
     invoke("render", "pour.toml", "-o", "p.gif")
     assert gif_colour_tables(Path("p.gif").read_bytes()) == (True, 10, 0)

@@ -503,14 +503,17 @@ def test_bare_names_prefer_the_mods_a_mod_requires(registry, tmp_path):
     assert rs.tables.heated_into[rs.index("sand")] == rs.index("glass:glass")
 
 
-def test_palette_gives_each_element_its_shades(ruleset):
-    assert len(ruleset.palette) == 768
+def test_each_element_gets_its_shades_scorched_shades_and_glow_colours(ruleset):
+    from sandmod.rules.compiler import GLOW_COLOURS, SCORCHED_SHADES, SHADES
+
     looks, n = ruleset.looks, len(ruleset.elements)
-    assert looks.normal.shape == (n, ruleset.shades) and ruleset.shades >= 4
+    assert (looks.normal.shape, looks.scorched.shape, looks.glow.shape) == ((n, SHADES), (n, SCORCHED_SHADES), (n, len(GLOW_COLOURS)))
+    assert ruleset.shades == SHADES == 8 and looks.normal.dtype == np.uint16
     used = np.concatenate([looks.normal.ravel(), looks.scorched[1:].ravel(), looks.glow[1:].ravel()])
-    assert len(set(used.tolist())) == len(used) <= 256  # every shade, scorch and glow colour its own entry
+    assert sorted(used.tolist()) == list(range(len(ruleset.colours)))  # every one its own colour, none unused
+    assert ruleset.colours.dtype == np.uint8 and ruleset.colours.shape == (8 + (n - 1) * 15, 3)  # the air only shades
     stone = ruleset.index("stone")
-    rgb = np.frombuffer(ruleset.palette, np.uint8).reshape(256, 3).astype(int)
+    rgb = ruleset.colours.astype(int)
     assert all(abs(rgb[k, 0] - 0x6B) < 40 for k in looks.normal[stone])
     assert rgb[looks.scorched[stone]].sum(axis=1).max() < rgb[looks.normal[stone]].sum(axis=1).min()  # darker
     assert all(r > g > b for r, g, b in rgb[looks.glow[stone]])  # glowing: red over green over blue

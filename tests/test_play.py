@@ -183,7 +183,7 @@ def test_a_square_brush_paints_a_square():
 # --- the screen is the world -------------------------------------------------------------------
 
 def wrong_cells(play: Play) -> int:
-    """Cells whose colour on the screen is not the world's (``world.image()`` through the palette)."""
+    """Cells whose colour on the screen is not the world's (``world.rgb()``)."""
     view, world = play.view, play.session.world
     screen = pygame.surfarray.array3d(view.screen).transpose(1, 0, 2)
     left, top = view.origin()
@@ -193,7 +193,7 @@ def wrong_cells(play: Play) -> int:
     if view.heat_view:
         truth = world.heat_image()[y0 : y0 + rows, x0 : x0 + columns]
     else:
-        truth = view.palette[world.image()][y0 : y0 + rows, x0 : x0 + columns]
+        truth = world.rgb()[y0 : y0 + rows, x0 : x0 + columns]
     return int((shown != truth).any(axis=2).sum())
 
 
@@ -266,6 +266,25 @@ def test_after_every_kind_of_action_the_screen_shows_the_world_cell_for_cell():
     frames(play, 40)
     assert low() > before + 3, "settled goo feels its new density"
     assert wrong_cells(play) == 0
+
+
+def test_the_screen_shows_a_world_of_more_than_256_colours_cell_for_cell(monkeypatch):
+    from conftest import walls_mod
+    from sandmod.rules import compiler
+
+    monkeypatch.setattr(compiler, "MAX_ELEMENTS", max(compiler.MAX_ELEMENTS, 4096))
+    Path("mods").mkdir()
+    Path("mods/walls.toml").write_text(walls_mod("walls", 280))
+    play = Play(Session.open(None, size=(140, 40)), scale=SCALE, fixed_steps=1)
+    world = play.session.world
+    walls = [e.index for e in world.ruleset.elements if e.id.startswith("walls:")]
+    for x in range(world.width):
+        column = np.zeros((world.height, world.width), bool)
+        column[10:, x] = True
+        world.paint(column, walls[2 * x])
+    away(play)
+    frames(play, 2)
+    assert len(np.unique(world.image())) > 256 and wrong_cells(play) == 0
 
 
 def test_writing_where_it_cannot_is_a_message_and_play_goes_on(tmp_path):

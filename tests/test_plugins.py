@@ -136,38 +136,30 @@ def test_a_failed_render_leaves_no_file_and_keeps_the_old_one(tmp_path, ruleset)
     assert [p.name for p in tmp_path.iterdir()] == ["movie.count"]
 
 
-def test_gif_palette_colours_are_made_distinct_invisibly():
-    from sandmod.plugins.gif import distinct_colours
-
-    palette = bytes([10, 10, 10] * 5 + [0, 0, 0] * 251)
-    out = distinct_colours(palette)
-    triples = [tuple(out[i : i + 3]) for i in range(0, 768, 3)]
-    assert len(set(triples)) == 256
-    assert triples[0] == (10, 10, 10)
-    assert all(max(abs(a - b) for a, b in zip(t, (10, 10, 10))) <= 1 for t in triples[:5])
-
-
 def test_gif_stores_what_changed_and_shows_a_repeated_picture_longer(tmp_path):
     from PIL import Image, ImageSequence
 
-    from sandmod.plugins.gif import MAX_DELAY_MS, changes, distinct_colours, write_gif
+    from sandmod.formats.recording import VideoSettings
+    from sandmod.plugins.gif import MAX_DELAY_MS, GifRecorder, changes
 
-    palette = distinct_colours(bytes(range(256)) * 3)
-    first = np.zeros((6, 8), np.uint8)
+    colours = np.arange(3 * 300).reshape(300, 3).astype(np.uint8)
+    first = np.zeros((6, 8), np.uint16)
     second = first.copy()
-    second[2:4, 5] = 7  # a 1 x 2 box at (5, 2)
+    second[2:4, 5] = 299  # a 1 x 2 box at (5, 2), of a colour beyond the global table's 256
     frames = [first, first.copy(), second, second.copy(), second.copy()]
     stored = [(box.shape, x, y, ms) for box, x, y, ms in changes(frames, 40)]
     assert stored == [((6, 8), 0, 0, 80), ((2, 1), 5, 2, 120)]
     assert [ms for *_, ms in changes([first] * 3, MAX_DELAY_MS // 2 + 10)] == [MAX_DELAY_MS // 2 + 10] * 3  # none over the most
     out = tmp_path / "m.gif"
-    with open(out, "wb") as f:
-        write_gif(f, frames, palette, 40, 2)
+    recorder = GifRecorder(out, VideoSettings(8, 6, colours, 25, loop=3))
+    for frame in frames:
+        recorder.add_frame(frame)
+    recorder.close()
+    assert (recorder.pictures, recorder.local_tables) == (2, 1)
     with Image.open(out) as im:
         assert (im.size, im.info["loop"]) == ((8, 6), 2)
         pictures = [(np.asarray(f.convert("RGB")).copy(), f.info["duration"]) for f in ImageSequence.Iterator(im)]
     assert [ms for _, ms in pictures] == [80, 120]
-    colours = np.frombuffer(palette, np.uint8).reshape(256, 3)
     assert (pictures[0][0] == colours[first]).all() and (pictures[1][0] == colours[second]).all()
 
 

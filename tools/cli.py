@@ -907,7 +907,7 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
 @click.option("--size", type=click.IntRange(256, 2048), help="The scenes' width and height in cells.  [default: 512]")
 @click.option("--steps", type=click.IntRange(1, 100000), help="Steps to time.  [default: 1000; a world's own frames]")
 @click.option("--threads", "thread_counts", multiple=True, type=ThreadCount(), help="Threads, or auto (repeatable; default: auto).")
-@click.option("--pixels", is_flag=True, help="Time turning a frame into palette indices instead, compiled against numpy.")
+@click.option("--pixels", is_flag=True, help="Time turning a frame into colour indices instead, compiled against numpy.")
 @click.option("--memory", "memory_sizes", multiple=True, type=click.IntRange(64, 16384), metavar="SIZE",
               help="Measure the peak memory of rendering a SIZE x SIZE world (repeatable), against the estimate the memory limit checks.")
 @click.option("--busy", type=click.IntRange(0, 256), default=0, help="Keep this many other processes busy on the CPUs while timing, as a user's machine is.")
@@ -934,7 +934,7 @@ def bench(scenes, worlds, size, steps, thread_counts, pixels, memory_sizes, busy
 
     With --record, each step also makes an image and a recorder encodes it:
     prints images encoded a second and encoding's share of the render.
-    --pixels times turning a frame (after up to 100 steps) into palette
+    --pixels times turning a frame (after up to 100 steps) into colour
     indices, the compiled way World.image does and the numpy way it did,
     in turns, on one thread.
 

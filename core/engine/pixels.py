@@ -1,9 +1,10 @@
-"""Frames to pixels, compiled: what every cell shows, as palette indices or as RGB.
+"""Frames to pixels, compiled: what every cell shows, as colour indices or as RGB.
 
 A cell shows its element's colour in its own shade (a particle shows what it
 carries); a scorched cell a darker shade; a cell hotter than its element's
 glow point glows red, orange, then yellow-white, a level every GLOW_STEP
-degrees (see :class:`sandmod.rules.compiler.Looks`). The heat view shows every
+degrees (see :class:`sandmod.rules.compiler.Looks`): an index into the
+ruleset's ``colours``, which :func:`rgb` turns into RGB. The heat view shows every
 cell's temperature instead, on one colour scale for all elements.
 
 Each function takes the world's arrays and writes into ``out``, for the
@@ -49,8 +50,8 @@ def _units(energy, recip):
 
 
 @njit(cache=True)
-def palette_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorched, glow, glow_from, glow_step, glow_energy, chunks, out):
-    """Write every cell's palette index into ``out`` (uint8, the world's shape); ``chunks``: a
+def colour_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorched, glow, glow_from, glow_step, glow_energy, chunks, out):
+    """Write every cell's colour index into ``out`` (uint16, the world's shape); ``chunks``: a
     mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.rules.compiler.Looks.glow_energy`."""
     height, width = cells.shape
     shades, scorched_shades, levels = normal.shape[1], scorched.shape[1], glow.shape[1]
@@ -87,7 +88,7 @@ def palette_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorch
 @njit(cache=True)
 def heat_rgb(cells, heat, heat_recip, colours, chunks, out):
     """Write every cell's heat-view colour into ``out`` (uint8, (height, width, 3)); ``colours`` from
-    :func:`heat_colours`; ``chunks`` as in :func:`palette_indices`."""
+    :func:`heat_colours`; ``chunks`` as in :func:`colour_indices`."""
     height, width = cells.shape
     lowest = np.int64(MIN_TEMPERATURE)
     every = chunks.shape[0] == 0
@@ -97,6 +98,22 @@ def heat_rgb(cells, heat, heat_recip, colours, chunks, out):
                 continue
             degrees = _units(np.int64(heat[y, x]), heat_recip[cells[y, x]]) // TEMP_ONE
             k = min(max(degrees - lowest, 0), len(colours) - 1)
+            out[y, x, 0] = colours[k, 0]
+            out[y, x, 1] = colours[k, 1]
+            out[y, x, 2] = colours[k, 2]
+
+
+@njit(cache=True)
+def rgb(indices, colours, chunks, out):
+    """Write the colour of every index in ``indices`` (a frame of :func:`colour_indices`) into ``out``
+    (uint8, (height, width, 3)); ``colours``: the ruleset's; ``chunks`` as in :func:`colour_indices`."""
+    height, width = indices.shape
+    every = chunks.shape[0] == 0
+    for y in range(height):
+        for x in range(width):
+            if not every and chunks[y >> CHUNK_SHIFT, x >> CHUNK_SHIFT] == 0:
+                continue
+            k = indices[y, x]
             out[y, x, 0] = colours[k, 0]
             out[y, x, 1] = colours[k, 1]
             out[y, x, 2] = colours[k, 2]

@@ -1,10 +1,12 @@
 """Output formats: what a recorder is, and writing its output atomically.
 
-A recorder receives finished frames (palette indices, already cropped and
-scaled) and writes them to a path: a file, or for a recorder that writes a
-folder of images, a folder. sandmod hands it a temporary path beside the real
-output and renames it into place only when the recorder closes cleanly, so a
-failed or interrupted render never leaves a half-written output.
+A recorder receives finished frames (colour indices into the settings'
+``colours``, already cropped and scaled) and writes them to a path: a file,
+or for a recorder that writes a folder of images, a folder. Formats with
+palettes fit the frames' colours into 256 with :func:`fit_palette`. sandmod
+hands it a temporary path beside the real output and renames it into place
+only when the recorder closes cleanly, so a failed or interrupted render
+never leaves a half-written output.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterator, Protocol
+from typing import Callable, Iterable, Iterator, Protocol
 
 import numpy as np
 
@@ -29,16 +31,16 @@ class VideoSettings:
     width: int
     #: Frame height in pixels.
     height: int
-    #: 768 bytes: 256 RGB triples.
-    palette: bytes
+    #: Every colour a frame may hold, uint8 (colours, 3) RGB: a frame's values are rows of it.
+    colours: np.ndarray
     #: Frames a second.
     fps: float
     #: Times the animation plays in all; 0 = forever.
     loop: int = 0
 
     def rgb(self, frame: np.ndarray) -> np.ndarray:
-        """A palette frame as a (height, width, 3) uint8 RGB array, for formats without palettes."""
-        return np.frombuffer(self.palette, np.uint8).reshape(256, 3)[frame]
+        """A frame as a (height, width, 3) uint8 RGB array."""
+        return self.colours[frame]
 
     @property
     def frame_ms(self) -> int:
@@ -50,14 +52,14 @@ class Recorder(Protocol):
     """Writes frames to one output."""
 
     def add_frame(self, frame: np.ndarray) -> None:
-        """Add one frame: a (height, width) uint8 array of palette indices."""
+        """Add one frame: a (height, width) uint16 array of colour indices (rows of ``settings.colours``)."""
 
     def close(self) -> None:
         """Finish the file. Called once, after the last frame."""
 
 
 class SavedAtClose:
-    """A recorder for formats written in one go: it keeps each frame (as an image, by default) and saves all on close.
+    """A recorder for formats written in one go: it keeps each frame (a copy, by default) and saves all on close.
 
     Subclasses say what is kept of a frame (:meth:`convert`) and how it is
     all saved (:meth:`save`).
@@ -65,7 +67,7 @@ class SavedAtClose:
 
     #: The file to write.
     path: Path
-    #: The frames' size, palette and speed.
+    #: The frames' size, colours and speed.
     settings: VideoSettings
 
     def __init__(self, path: Path, settings: VideoSettings):
@@ -74,11 +76,11 @@ class SavedAtClose:
         self._images: list = []
 
     def convert(self, frame: np.ndarray):
-        """The pillow image kept for a frame (by default in the shared palette)."""
-        return palette_image(frame, self.settings.palette)
+        """What is kept of a frame (by default a copy of its colour indices)."""
+        return np.array(frame)
 
     def save(self, first, rest: list) -> None:
-        """Write the images to ``self.path``."""
+        """Write what was kept of the frames to ``self.path``."""
         raise NotImplementedError
 
     def add_frame(self, frame: np.ndarray) -> None:
@@ -231,18 +233,68 @@ def output_bytes(path: Path) -> int:
     return sum(p.stat().st_size for p in path.iterdir()) if path.is_dir() else path.stat().st_size
 
 
-def palette_image(frame: np.ndarray, palette: bytes):
-    """A palette frame as a pillow image in mode ``P``."""
+#: The most colours a palette image holds.
+PALETTE_SIZE = 256
+
+
+@dataclass(frozen=True)
+class Palette:
+    """Frames' colours as at most 256, for formats with palettes: made by :func:`fit_palette`."""
+
+    #: uint8 (entries, 3) RGB, at most PALETTE_SIZE entries.
+    rgb: np.ndarray
+    #: uint8 per colour index: its entry (for the colours of the frames it was made for).
+    lookup: np.ndarray
+    #: bool per colour index: held as it is (every colour of the frames, where :attr:`exact`).
+    kept: np.ndarray
+    #: The frames held at most PALETTE_SIZE colours: each shows as it is.
+    exact: bool
+
+    def indices(self, frame: np.ndarray) -> np.ndarray:
+        """A frame's colour indices as entries of the palette, uint8."""
+        return np.take(self.lookup, frame)
+
+    def image(self, frame: np.ndarray):
+        """A frame as a pillow image in mode ``P``."""
+        from PIL import Image
+
+        image = Image.fromarray(self.indices(frame), mode="P")
+        image.putpalette(self.rgb.tobytes())
+        return image
+
+
+def fit_palette(frames: Iterable[np.ndarray], colours: np.ndarray) -> Palette:
+    """The colours ``frames`` hold as a palette: all of them, exactly, when they are at most
+    PALETTE_SIZE (found by counting the indices, not by comparing colours). Beyond, a quantized one
+    (``exact`` False): the PALETTE_SIZE most common colours as they are, every other as the nearest
+    of them; a format that must be lossless writes RGB instead."""
+    counts = sum(np.bincount(frame.ravel(), minlength=len(colours)) for frame in frames)
+    used = np.flatnonzero(counts)
+    kept = used if len(used) <= PALETTE_SIZE else np.sort(used[np.argsort(-counts[used], kind="stable")[:PALETTE_SIZE]])
+    held = np.zeros(len(colours), bool)
+    held[kept] = True
+    lookup = np.zeros(len(colours), np.uint8)
+    lookup[kept] = np.arange(len(kept))
+    others = used[~held[used]]
+    if len(others):
+        lookup[others] = _nearest(colours[others], colours[kept])
+    return Palette(colours[kept], lookup, held, not len(others))
+
+
+def _nearest(rgb: np.ndarray, table: np.ndarray, rows: int = 1024) -> np.ndarray:
+    """For each colour of ``rgb``, the entry of ``table`` nearest to it (squared distance, the first of equals)."""
+    table = table.astype(np.int32)[None]
+    parts = np.split(rgb.astype(np.int32), list(range(rows, len(rgb), rows)))
+    return np.concatenate([((part[:, None, :] - table) ** 2).sum(axis=2).argmin(axis=1) for part in parts])
+
+
+def write_png(path: Path, frame: np.ndarray, colours: np.ndarray) -> None:
+    """Write one frame (colour indices) as a PNG: indexed when it holds at most PALETTE_SIZE colours, else RGB."""
     from PIL import Image
 
-    image = Image.fromarray(np.ascontiguousarray(frame, dtype=np.uint8), mode="P")
-    image.putpalette(palette)
-    return image
-
-
-def write_png(path: Path, frame: np.ndarray, palette: bytes) -> None:
-    """Write one palette frame as an indexed PNG."""
-    palette_image(frame, palette).save(path, format="PNG", compress_level=1)
+    palette = fit_palette([frame], colours)
+    image = palette.image(frame) if palette.exact else Image.fromarray(colours[frame], mode="RGB")
+    image.save(path, format="PNG", compress_level=1)
 
 
 def _umask() -> int:

@@ -356,7 +356,7 @@ def numpy_image(world: World) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PixelsResult(_Result):
-    """A frame to palette indices, compiled and in numpy (``sandmod bench --pixels``)."""
+    """A frame to colour indices, compiled and in numpy (``sandmod bench --pixels``)."""
 
     scene: str
     width: int
@@ -366,14 +366,14 @@ class PixelsResult(_Result):
 
 
 def time_pixels(bench: Bench, steps: int, repeats: int = 5) -> tuple[float, float]:
-    """Milliseconds a frame of ``bench``'s world takes to become palette indices: compiled
+    """Milliseconds a frame of ``bench``'s world takes to become colour indices: compiled
     (:meth:`World.image`) and in numpy (:func:`numpy_image`), each the best of ``repeats``
     timings taken in turns, after ``steps`` steps (so that there is heat and motion)."""
     world = bench.make()
     world.threads = 1
     for _ in range(steps):
         world.step()
-    out = np.empty((world.height, world.width), np.uint8)
+    out = np.empty((world.height, world.width), np.uint16)
     world.image(out)  # compile, or load from the cache
     best = [float("inf"), float("inf")]
     for _ in range(repeats):
@@ -416,7 +416,7 @@ class RecordResult(_Result):
     images: int  # one image a step, at one pixel a cell
     threads: int | str  # a count, or "auto"
     step_seconds: float
-    image_seconds: float  # palette frames from the world's state (colours, shades, scorch, glow)
+    image_seconds: float  # colour index frames from the world's state (colours, shades, scorch, glow)
     encode_seconds: float  # the recorder: add_frame for each, then close (compressing, writing)
     images_per_second: float  # encoding alone
     encode_share: float  # of the whole render's time
@@ -432,7 +432,7 @@ def record(bench: Bench, recorder, images: int, threads: int, folder) -> RecordR
     output = Path(folder) / f"bench-{recorder.name}{recorder.extensions[0] if recorder.extensions else ''}"
     if recorder.folder:
         output.mkdir()
-    out = recorder.open(output, VideoSettings(world.width, world.height, world.ruleset.palette, 25))
+    out = recorder.open(output, VideoSettings(world.width, world.height, world.ruleset.colours, 25))
     step = image = encode = 0.0
     for _ in range(images):
         t0 = time.perf_counter()

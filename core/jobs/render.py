@@ -42,7 +42,7 @@ class Framing:
         return width * self.scale, height * self.scale
 
     def image(self, world: World) -> np.ndarray:
-        """The world's current frame as palette indices, cropped and scaled."""
+        """The world's current frame as colour indices, cropped and scaled."""
         frame = world.image()
         if self.crop is not None:
             x, y, w, h = self.crop
@@ -112,7 +112,7 @@ def render(
     outputs is touched. A failure to write one raises WriteError naming it.
     """
     width, height = framing.size(world)
-    settings = VideoSettings(width, height, world.ruleset.palette, fps, loop)
+    settings = VideoSettings(width, height, world.ruleset.colours, fps, loop)
     with contextlib.ExitStack() as stack:
         place = atomic_folder(output, recorder.folder) if recorder.folder else atomic_path(output)
         tmp = stack.enter_context(place)
@@ -136,7 +136,7 @@ def render(
             out.close()
         if still_tmp is not None:
             with writing(still):
-                write_png(still_tmp, image, settings.palette)
+                write_png(still_tmp, image, settings.colours)
         for (path, write), path_tmp in zip(also, extra_tmps):
             with writing(path):
                 write(world, path_tmp)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from ..rules.compiler import Ruleset
 
 SWATCH = 16  # pixels per colour square
@@ -28,7 +26,6 @@ def swatch_card(ruleset: Ruleset):
     from PIL import Image, ImageDraw, ImageFont
 
     looks = ruleset.looks
-    palette = np.frombuffer(ruleset.palette, np.uint8).reshape(256, 3)
     shades_x, scorched_x, glow_x = card_layout(ruleset)
     text_x = glow_x + looks.glow.shape[1] * SWATCH + GAP
     font = ImageFont.load_default()
@@ -45,7 +42,7 @@ def swatch_card(ruleset: Ruleset):
         top = row * ROW + 2
         for x, indices in ((shades_x, looks.normal), (scorched_x, looks.scorched), (glow_x, looks.glow)):
             for j, index in enumerate(indices[element.index]):
-                colour = tuple(int(c) for c in palette[index])
+                colour = tuple(int(c) for c in ruleset.colours[index])
                 draw.rectangle([x + j * SWATCH, top, x + (j + 1) * SWATCH - 1, top + SWATCH - 1], fill=colour)
         draw.text((text_x, top + 3), element.id, fill=TEXT, font=font)
         draw.text((kind_x, top + 3), element.spec.archetype, fill=MUTED, font=font)

@@ -55,7 +55,7 @@ def compile_part(part: str) -> None:
     elif part == "taps and sprays":
         world.spawn_particles(np.zeros(1, np.int64), np.zeros(1, np.int64), 0, 0.0, 0.0)
     elif part == "pixels":
-        world.image()
+        world.image(rgb=np.empty((world.height, world.width, 3), np.uint8))
         world.heat_image()
     else:
         raise ValueError(f"no part {part!r}")

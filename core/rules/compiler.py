@@ -163,9 +163,9 @@ class Ruleset:
     reactions: tuple[CompiledReaction, ...]
     #: The per-element arrays the kernel reads.
     tables: Tables
-    #: 768 bytes, 256 RGB triples.
-    palette: bytes
-    #: Palette indices per element: shades, scorched shades, glow levels.
+    #: Every colour a cell can show, uint8 (colours, 3) RGB: what :attr:`looks` and frames index.
+    colours: np.ndarray
+    #: Colour indices per element: shades, scorched shades, glow levels.
     looks: "Looks"
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
     #: What loads but may not be what the mods' authors meant: one field patched by two mods that do not require each other.
@@ -188,8 +188,7 @@ class Ruleset:
 
     def swatch(self, element: int) -> tuple[int, int, int]:
         """The RGB colour that stands for ``element`` (its first shade), for menus and swatches."""
-        start = 3 * int(self.looks.normal[element, 0])
-        return tuple(self.palette[start : start + 3])
+        return tuple(int(c) for c in self.colours[self.looks.normal[element, 0]])
 
     def index(self, ref: str, within: str | None = None, near: Sequence[str] = ()) -> int:
         """The numeric id of ``ref`` ('sand' or 'sand:sand'); KeyError with a message if unknown.
@@ -262,8 +261,8 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
-    palette, looks = _palette(elements, t.heat_recip)
-    return Ruleset(tuple(mods), elements, reactions, t, palette, looks, ids, tuple(warnings))
+    colours, looks = _colours(elements, t.heat_recip)
+    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings))
 
 
 def _numbered(defs: dict[str, "Definition"], order: Sequence[str]) -> tuple[ElementInfo, ...]:
@@ -691,15 +690,18 @@ def _hex_rgb(color: str) -> tuple[int, int, int]:
 
 
 SCORCH_DARKEN = 0.45  # a scorched cell keeps this much of its brightness
+SHADES = 8  # colours each element's cells pick from
+SCORCHED_SHADES = 4  # of a scorched cell
 
 
 @dataclass(frozen=True)
 class Looks:
-    """Palette indices per element: its shades, its scorched shades, and its glow levels."""
+    """Colour indices (rows of :attr:`Ruleset.colours`) per element: its shades, its scorched shades,
+    and its glow levels; the same for an element however many others are loaded."""
 
-    normal: np.ndarray  # uint8[n, shades]
-    scorched: np.ndarray  # uint8[n, scorched shades]
-    glow: np.ndarray  # uint8[n, len(GLOW_COLOURS)]
+    normal: np.ndarray  # uint16[n, SHADES]
+    scorched: np.ndarray  # uint16[n, SCORCHED_SHADES]
+    glow: np.ndarray  # uint16[n, len(GLOW_COLOURS)]
     glow_from: np.ndarray  # int64[n]: temperature (TEMP_ONE units) where it starts to glow
     glow_energy: np.ndarray  # int64[n, len(GLOW_COLOURS)]: heat energy from which it glows at each level
 
@@ -723,55 +725,51 @@ def _glow_energies(glow_from: list[int], glow_step: int, heat_recip: list[int]) 
     return table
 
 
-def _palette_sizes(n: int) -> tuple[int, int]:
-    """The most shades per element (at most 8), and scorched shades, that fit 256 colours."""
-    glow = len(GLOW_COLOURS)
-    for shades in range(8, 0, -1):
-        scorched = -(-shades // 2)
-        if n * shades + (n - 1) * (scorched + glow) <= 256:
-            return shades, scorched
-    return max(1, 256 // n), 0  # so many elements that only shades fit: no scorch or glow colours
-
-
-def _palette(elements: Sequence[ElementInfo], heat_recip: np.ndarray) -> tuple[bytes, Looks]:
-    """One shared 256-colour palette: each element's shades, darker scorched shades and glow levels.
-
-    The empty cell (air) gets shades only: it neither scorches nor glows.
+def _colours(elements: Sequence[ElementInfo], heat_recip: np.ndarray) -> tuple[np.ndarray, Looks]:
+    """Every colour a cell can show (uint8 (colours, 3)), and each element's indices into it: its
+    shades, darker scorched shades and glow levels, in element order. The empty cell (air) gets
+    shades only: it neither scorches nor glows (its scorched and glow indices are its first shade).
     """
     n = len(elements)
-    shades, scorched = _palette_sizes(n)
-    palette = np.zeros((256, 3), np.uint8)
     # An element hot by nature (lava, fire) already looks hot: it glows only when hotter still.
     glow_from = [temperature_units(max(GLOW_FROM, e.spec.temperature)) for e in elements]
     looks = Looks(
-        np.zeros((n, shades), np.uint8),
-        np.zeros((n, max(scorched, 1)), np.uint8),
-        np.zeros((n, len(GLOW_COLOURS)), np.uint8),
+        np.zeros((n, SHADES), np.uint16),
+        np.zeros((n, SCORCHED_SHADES), np.uint16),
+        np.zeros((n, len(GLOW_COLOURS)), np.uint16),
         np.array(glow_from, np.int64),
         _glow_energies(glow_from, temperature_units(GLOW_STEP), heat_recip.tolist()),
     )
-    entry = 0
+    rows: list[np.ndarray] = []
 
-    def add(rgb) -> int:
-        nonlocal entry
-        palette[entry] = np.clip(np.round(rgb), 0, 255)
-        entry += 1
-        return entry - 1
+    def add(colours: list[np.ndarray]) -> np.ndarray:
+        rows.extend(colours)
+        return np.arange(len(rows) - len(colours), len(rows))
 
     for info in elements:
-        colors = [np.array(_hex_rgb(c), float) for c in info.spec.color]
-
-        def shaded(j: int, count: int) -> np.ndarray:
-            levels = -(-count // len(colors))
-            v = ((j // len(colors)) + 0.5) / levels  # spread across (0, 1)
-            return colors[j % len(colors)] * (1.0 + info.spec.shade * (2.0 * v - 1.0))
-
-        looks.normal[info.index] = [add(shaded(j, shades)) for j in range(shades)]
-        if info.index == 0 or scorched == 0:
-            looks.scorched[info.index] = looks.normal[info.index, 0]
-            looks.glow[info.index] = looks.normal[info.index, 0]
+        shades = _element_colours(info.spec)
+        looks.normal[info.index] = add(shades[:SHADES])
+        if info.index == 0:
+            looks.scorched[0], looks.glow[0] = looks.normal[0, 0], looks.normal[0, 0]
             continue
-        looks.scorched[info.index] = [add(shaded(j, scorched) * SCORCH_DARKEN) for j in range(scorched)]
-        base = sum(colors) / len(colors)
-        looks.glow[info.index] = [add(base * (1 - mix) + np.array(hot) * mix) for hot, mix in zip(GLOW_COLOURS, GLOW_MIX)]
-    return palette.tobytes(), looks
+        looks.scorched[info.index] = add(shades[SHADES : SHADES + SCORCHED_SHADES])
+        looks.glow[info.index] = add(shades[SHADES + SCORCHED_SHADES :])
+    return np.clip(np.round(rows), 0, 255).astype(np.uint8), looks
+
+
+def _element_colours(spec: Element) -> list[np.ndarray]:
+    """An element's colours (RGB, unrounded): its SHADES shades, its SCORCHED_SHADES scorched ones
+    and a glow colour per level."""
+    colors = [np.array(_hex_rgb(c), float) for c in spec.color]
+
+    def shaded(j: int, count: int) -> np.ndarray:
+        levels = -(-count // len(colors))
+        v = ((j // len(colors)) + 0.5) / levels  # spread across (0, 1)
+        return colors[j % len(colors)] * (1.0 + spec.shade * (2.0 * v - 1.0))
+
+    base = sum(colors) / len(colors)
+    return (
+        [shaded(j, SHADES) for j in range(SHADES)]
+        + [shaded(j, SCORCHED_SHADES) * SCORCH_DARKEN for j in range(SCORCHED_SHADES)]
+        + [base * (1 - mix) + np.array(hot) * mix for hot, mix in zip(GLOW_COLOURS, GLOW_MIX)]
+    )

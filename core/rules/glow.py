@@ -1,5 +1,5 @@
 """How hot cells look: they glow from the Draper point on, a level brighter every step, and
-what a colour looks like at a temperature. Read by the palette (:mod:`.compiler`), by the forms
+what a colour looks like at a temperature. Read by the colours (:mod:`.compiler`), by the forms
 an element makes of itself (:mod:`.definitions`), and by the pixels' reference in numpy."""
 
 from __future__ import annotations

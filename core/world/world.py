@@ -547,23 +547,28 @@ class World:
         s = self.state
         return np.where(s.carry != 0, s.carry, s.cells)
 
-    def image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
-        """Palette indices of every cell, (height, width), into ``out`` when given.
+    def image(self, out: np.ndarray | None = None, changed_only: bool = False, rgb: np.ndarray | None = None) -> np.ndarray:
+        """Colour indices of every cell (rows of ``ruleset.colours``), uint16 (height, width), into
+        ``out`` when given.
 
         A cell shows its element's colour in its own shade; scorched cells are
         darker, and cells hotter than the glow point glow red, orange, then
         yellow. With ``changed_only``, only the chunks that may have changed
         since the last such call are drawn (``out`` holds the rest from then).
+        With ``rgb`` (uint8 (height, width, 3), or 4 with the last left
+        alone), the cells drawn are written there in colour too.
         """
         from ..engine import pixels
 
         looks, s = self.ruleset.looks, self.state
-        out = np.empty((self.height, self.width), np.uint8) if out is None else out
+        out = np.empty((self.height, self.width), np.uint16) if out is None else out
         chunks = self._take_changed() if changed_only else _ALL_CHUNKS
-        pixels.palette_indices(
+        pixels.colour_indices(
             s.cells, s.carry, s.shade, s.flags, s.heat, self.tables.heat_recip,
             looks.normal, looks.scorched, looks.glow, looks.glow_from, _GLOW_STEP, looks.glow_energy, chunks, out,
         )
+        if rgb is not None:
+            pixels.rgb(out, self.ruleset.colours, chunks, rgb)
         return out
 
     def heat_image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:
@@ -583,8 +588,8 @@ class World:
         return changed
 
     def rgb(self) -> np.ndarray:
-        """The frame in colour, RGB (height, width, 3): :meth:`image` through the palette."""
-        return np.frombuffer(self.ruleset.palette, np.uint8).reshape(256, 3)[self.image()]
+        """The frame in colour, RGB (height, width, 3): :meth:`image` through ``ruleset.colours``."""
+        return self.ruleset.colours[self.image()]
 
     def run(self, frames: int) -> None:
         """:meth:`step` ``frames`` times."""
@@ -621,7 +626,7 @@ class World:
 
         scale = max(1, min(8, 512 // max(self.width, self.height)))
         out = io.BytesIO()
-        write_png(out, enlarge(self.image(), scale), self.ruleset.palette)
+        write_png(out, enlarge(self.image(), scale), self.ruleset.colours)
         return out.getvalue()
 
 

@@ -119,7 +119,7 @@ def _simulate(run: Run, work: Path) -> dict[str, Any]:
     if recorder is not None:
         recorder.close()
         outputs.append(f"animation.{run.record['format']}")
-    write_png(work / "last.png", world.image(), world.ruleset.palette)
+    write_png(work / "last.png", world.image(), world.ruleset.colours)
     outputs.append("last.png")
     row["outputs"] = ";".join(outputs)
     return row
@@ -148,5 +148,5 @@ def _recorder(loaded, run: Run, work: Path):
     if spec is None:
         return None, 1, 1
     world, render = loaded.world, loaded.spec.render
-    settings = VideoSettings(world.width * scale, world.height * scale, world.ruleset.palette, render.fps, render.loop)
+    settings = VideoSettings(world.width * scale, world.height * scale, world.ruleset.colours, render.fps, render.loop)
     return spec.open(work / f"animation.{run.record['format']}", settings), every, scale

@@ -47,20 +47,20 @@ def save_png(rgb: np.ndarray, path: Path) -> None:
 
 
 class Capture:
-    """A GIF of frames (palette indices) written on a thread of its own; :meth:`result` says how it went."""
+    """A GIF of frames (colour indices) written on a thread of its own; :meth:`result` says how it went."""
 
-    def __init__(self, frames: list[np.ndarray], scale: int, palette: bytes, fps: float, name: str, places: Sequence[Path]):
+    def __init__(self, frames: list[np.ndarray], scale: int, colours: np.ndarray, fps: float, name: str, places: Sequence[Path]):
         self.outcome: str | None = None
-        self._thread = threading.Thread(target=self._write, args=(frames, scale, palette, fps, name, places), daemon=False)
+        self._thread = threading.Thread(target=self._write, args=(frames, scale, colours, fps, name, places), daemon=False)
         self._thread.start()
 
-    def _write(self, frames, scale, palette, fps, name, places) -> None:
+    def _write(self, frames, scale, colours, fps, name, places) -> None:
         from ...world.loading import load_registry
 
         try:
             spec = load_registry().recorders["gif"].value
             height, width = frames[0].shape
-            settings = VideoSettings(width * scale, height * scale, palette, fps)
+            settings = VideoSettings(width * scale, height * scale, colours, fps)
 
             def write(path: Path) -> None:
                 with atomic_path(path) as temporary:

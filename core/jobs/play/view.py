@@ -3,7 +3,7 @@ status line below it, the brush outline and the overlays (problems, help).
 
 The view owns what is stale on the screen. The world records every chunk that changed since it was
 last drawn, whatever changed it (steps, strokes, blasts, undo, a snapshot); a new world (after an
-undo, a reload or a snapshot load), a new palette or another view mode redraws everything.
+undo, a reload or a snapshot load) or another view mode redraws everything.
 """
 
 from __future__ import annotations
@@ -109,14 +109,13 @@ class View:
     # --- what is stale ----------------------------------------------------------------------
 
     def attach(self, world: World) -> None:
-        """Show ``world`` (a new one, or the same under a new palette): everything is stale."""
+        """Show ``world`` (a new one, or the same under new rules): everything is stale."""
         pygame = self.pg
         self.world = world
-        self.pixels = np.zeros((world.height, world.width), np.uint8)
+        self.pixels = np.zeros((world.height, world.width), np.uint16)  # the cells' colour indices (what a capture keeps)
+        self.rgb = np.zeros((world.height, world.width, 4), np.uint8)  # their colours, and a byte that 32-bit pixels scale faster with
+        self.cells_surface = pygame.image.frombuffer(self.rgb, (world.width, world.height), "RGBX")  # rgb's memory: no copy
         self.heat = np.zeros((world.height, world.width, 3), np.uint8)
-        self.cells_surface = pygame.Surface((world.width, world.height), depth=8)
-        self.palette = np.frombuffer(world.ruleset.palette, np.uint8).reshape(256, 3)
-        self.cells_surface.set_palette([tuple(int(c) for c in rgb) for rgb in self.palette])
         self.heat_surface = pygame.Surface((world.width, world.height), depth=24)
         self.everything = True
         self.scaled = None
@@ -133,9 +132,8 @@ class View:
             world.heat_image(self.heat, changed_only=not self.everything)
             self.pg.surfarray.blit_array(self.heat_surface, self.heat.transpose(1, 0, 2))
         else:
-            world.image(self.pixels, changed_only=not self.everything)
+            world.image(self.pixels, changed_only=not self.everything, rgb=self.rgb)
             self._preview(world)
-            self.pg.surfarray.blit_array(self.cells_surface, self.pixels.T)
         self.everything, self.scaled = False, None
 
     def _preview(self, world: World) -> None:
@@ -145,6 +143,7 @@ class View:
                 layer = painting.layer(world.cells)
                 shown = layer >= 0
                 self.pixels[shown] = world.ruleset.looks.normal[layer[shown], 0]
+                self.rgb[shown, :3] = world.ruleset.colours[self.pixels[shown]]
 
     # --- where things are -------------------------------------------------------------------
 

@@ -495,7 +495,7 @@ class Play:
             return
         world, view = self.session.world, self.view
         scale = max(1, min(view.scale, 1280 // world.width, 800 // world.height))  # the whole world
-        self.capture_job = Capture(list(self.captured), scale, world.ruleset.palette, DISPLAY_FPS / 2, "play-capture.gif", self.places)
+        self.capture_job = Capture(list(self.captured), scale, world.ruleset.colours, DISPLAY_FPS / 2, "play-capture.gif", self.places)
         self.say(f"writing play-capture.gif: {len(self.captured)} images")
 
     # --- the status line ------------------------------------------------------------------------

@@ -16,7 +16,7 @@ class AsciiRecorder:
     """Writes each frame as rows of characters, by the brightness of each pixel's colour."""
 
     def __init__(self, path: Path, settings: VideoSettings):
-        rgb = np.frombuffer(settings.palette, np.uint8).reshape(256, 3).astype(float)
+        rgb = settings.colours.astype(float)
         brightness = rgb @ np.array([0.299, 0.587, 0.114]) / 255.0
         self._chars = np.array(list(RAMP))[np.minimum((brightness * len(RAMP)).astype(int), len(RAMP) - 1)]
         self._file = open(path, "w", encoding="utf-8")
