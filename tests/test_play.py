@@ -19,7 +19,6 @@ from sandmod.jobs.play import Play  # noqa: E402
 from sandmod.jobs.play.menu import FAVOURITES, FOUND, KEYED, listed, offered  # noqa: E402
 from sandmod.jobs.play.view import CHOSEN, MARGIN, MENU, PANEL, STATUS, TEXT, contrast, ink  # noqa: E402
 from sandmod.jobs.session import Session  # noqa: E402
-from sandmod.rules.compiler import MAX_ELEMENTS  # noqa: E402
 from sandmod.tools.cli import cli  # noqa: E402
 from sandmod.world.loading import load_world  # noqa: E402
 
@@ -268,11 +267,8 @@ def test_after_every_kind_of_action_the_screen_shows_the_world_cell_for_cell():
     assert wrong_cells(play) == 0
 
 
-def test_the_screen_shows_a_world_of_more_than_256_colours_cell_for_cell(monkeypatch):
+def test_the_screen_shows_a_world_of_more_than_256_colours_cell_for_cell():
     from conftest import walls_mod
-    from sandmod.rules import compiler
-
-    monkeypatch.setattr(compiler, "MAX_ELEMENTS", max(compiler.MAX_ELEMENTS, 4096))
     Path("mods").mkdir()
     Path("mods/walls.toml").write_text(walls_mod("walls", 280))
     play = Play(Session.open(None, size=(140, 40)), scale=SCALE, fixed_steps=1)
@@ -509,8 +505,8 @@ def test_the_number_keys_give_the_favourites_and_m_pins_and_unpins():
 
 SECTIONS = ("metals", "plants", "machines", "food", "minerals", "weather", "space", "favourites", "tools", "found")  # the last two: tabs apart from the menu's own
 FIELDS = {"powder": "density = 1500", "liquid": "density = 1000\ndispersion = 2", "gas": "density = 0.5\ndispersion = 2", "static": ""}
-#: 20 packs of 25 elements, 500 in all, once the loader takes them (at most MAX_ELEMENTS, now 256: 10 each till then).
-PACKS, PER_PACK = 20, 25 if MAX_ELEMENTS > 530 else 10
+#: 20 packs of 25 elements: 500 in all.
+PACKS, PER_PACK = 20, 25
 
 
 def mod_packs(folder: Path, packs: int, per_pack: int) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -73,3 +75,12 @@ def test_the_most_elements_load_and_one_more_is_refused(tmp_path):
     (tmp_path / "last.toml").write_text((tmp_path / "last.toml").read_text() + '[elements.one_more]\narchetype = "static"\ncolor = "#808080"\n')
     with pytest.raises(ProblemsError, match=f"{MAX_ELEMENTS + 1} elements loaded; at most {MAX_ELEMENTS}"):
         load_ruleset(None, [tmp_path])
+
+
+def test_bench_loaded_times_a_scene_with_few_and_with_many_elements_on_the_same_cells():
+    import bench
+
+    result = CliRunner().invoke(bench.main, ["loaded", "--scene", "mix", "--size", "64", "--steps", "10", "--elements", "100", "--json"])
+    assert result.exit_code == 0, result.output
+    got = json.loads(result.output)
+    assert (got["few_elements"], got["elements"]) == (8, 122) and got["ratio"] > 0
