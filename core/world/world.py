@@ -547,7 +547,8 @@ class World:
         s = self.state
         return np.where(s.carry != 0, s.carry, s.cells)
 
-    def image(self, out: np.ndarray | None = None, changed_only: bool = False, rgb: np.ndarray | None = None) -> np.ndarray:
+    def image(self, out: np.ndarray | None = None, changed_only: bool = False, rgb: np.ndarray | None = None,
+              colours: np.ndarray | None = None) -> np.ndarray:
         """Colour indices of every cell (rows of ``ruleset.colours``), uint16 (height, width), into
         ``out`` when given.
 
@@ -556,7 +557,8 @@ class World:
         yellow. With ``changed_only``, only the chunks that may have changed
         since the last such call are drawn (``out`` holds the rest from then).
         With ``rgb`` (uint8 (height, width, 3), or 4 with the last left
-        alone), the cells drawn are written there in colour too.
+        alone), the cells drawn are written there in colour too: rows of
+        ``colours``, the ruleset's unless given (in another channel order, say).
         """
         from ..engine import pixels
 
@@ -568,7 +570,7 @@ class World:
             looks.normal, looks.scorched, looks.glow, looks.glow_from, _GLOW_STEP, looks.glow_energy, chunks, out,
         )
         if rgb is not None:
-            pixels.rgb(out, self.ruleset.colours, chunks, rgb)
+            pixels.rgb(out, self.ruleset.colours if colours is None else colours, chunks, rgb)
         return out
 
     def heat_image(self, out: np.ndarray | None = None, changed_only: bool = False) -> np.ndarray:

@@ -113,8 +113,12 @@ class View:
         pygame = self.pg
         self.world = world
         self.pixels = np.zeros((world.height, world.width), np.uint16)  # the cells' colour indices (what a capture keeps)
-        self.rgb = np.zeros((world.height, world.width, 4), np.uint8)  # their colours, and a byte that 32-bit pixels scale faster with
-        self.cells_surface = pygame.image.frombuffer(self.rgb, (world.width, world.height), "RGBX")  # rgb's memory: no copy
+        # Their colours, 32 bits a pixel (which pygame scales fastest), in the screen's own byte order
+        # where it is the usual B, G, R, X: then the cells are scaled straight onto the screen.
+        self.native = self.screen.get_masks()[:3] == (0xFF0000, 0xFF00, 0xFF)
+        self.colours = np.ascontiguousarray(world.ruleset.colours[:, ::-1] if self.native else world.ruleset.colours)
+        self.rgb = np.full((world.height, world.width, 4), 255, np.uint8)
+        self.cells_surface = pygame.image.frombuffer(self.rgb, (world.width, world.height), "BGRA" if self.native else "RGBX")  # rgb's memory: no copy
         self.heat = np.zeros((world.height, world.width, 3), np.uint8)
         self.heat_surface = pygame.Surface((world.width, world.height), depth=24)
         self.everything = True
@@ -132,7 +136,7 @@ class View:
             world.heat_image(self.heat, changed_only=not self.everything)
             self.pg.surfarray.blit_array(self.heat_surface, self.heat.transpose(1, 0, 2))
         else:
-            world.image(self.pixels, changed_only=not self.everything, rgb=self.rgb)
+            world.image(self.pixels, changed_only=not self.everything, rgb=self.rgb, colours=self.colours)
             self._preview(world)
         self.everything, self.scaled = False, None
 
@@ -143,7 +147,7 @@ class View:
                 layer = painting.layer(world.cells)
                 shown = layer >= 0
                 self.pixels[shown] = world.ruleset.looks.normal[layer[shown], 0]
-                self.rgb[shown, :3] = world.ruleset.colours[self.pixels[shown]]
+                self.rgb[shown, :3] = self.colours[self.pixels[shown]]
 
     # --- where things are -------------------------------------------------------------------
 
@@ -245,11 +249,16 @@ class View:
 
     def _world(self) -> None:
         pygame = self.pg
-        if self.scaled is None:
-            columns, rows = self.shown()
-            source = (self.heat_surface if self.heat_view else self.cells_surface).subsurface((*self.corner, columns, rows))
-            self.scaled = pygame.transform.scale(source, (columns * self.scale, rows * self.scale))
+        columns, rows = self.shown()
+        size = (columns * self.scale, rows * self.scale)
         self.screen.fill((0, 0, 0), (0, 0, *self.area))
+        if self.native and not self.heat_view:  # straight onto the screen, every frame: no copy to blit
+            source = self.cells_surface.subsurface((*self.corner, columns, rows))
+            pygame.transform.scale(source, size, self.screen.subsurface((*self.origin(), *size)))
+            return
+        if self.scaled is None:
+            source = (self.heat_surface if self.heat_view else self.cells_surface).subsurface((*self.corner, columns, rows))
+            self.scaled = pygame.transform.scale(source, size)
         self.screen.blit(self.scaled, self.origin())
 
     def _outline(self, mouse, size: int, square: bool) -> None:
