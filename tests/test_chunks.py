@@ -23,9 +23,9 @@ EXAMPLES = Path(__file__).parent.parent / "examples"
 
 def digest(world) -> str:
     """A hash of every cell's state: its values, whatever width each array stores them in, and its
-    elements by their place in :attr:`Ruleset.listed`, whatever numbers the compiler gave them."""
+    elements by their place in :attr:`Ruleset.by_id`, whatever numbers the compiler gave them."""
     listed = np.empty(len(world.ruleset.elements), np.int64)
-    listed[[e.index for e in world.ruleset.listed]] = np.arange(len(listed))
+    listed[[e.index for e in world.ruleset.by_id]] = np.arange(len(listed))
     h = hashlib.sha256()
     for name, array in zip(world.state._fields, world.state):
         h.update((listed[array] if name in ("cells", "carry") else array.astype(np.int64)).tobytes())

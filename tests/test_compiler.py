@@ -105,7 +105,7 @@ def test_the_elements_most_react_with_are_numbered_first_and_listed_by_id(rulese
     partners = (ruleset.tables.react_pair > 0).sum(axis=0)
     assert list(partners[1:]) == sorted(partners[1:], reverse=True)
     assert ruleset.elements[1].id == "acid:acid"
-    assert [e.id for e in ruleset.listed[1:]] == sorted(e.id for e in ruleset.elements[1:])
+    assert [e.id for e in ruleset.by_id[1:]] == sorted(e.id for e in ruleset.elements[1:])
 
 
 def test_reactions_fill_the_matrix_both_ways(ruleset):

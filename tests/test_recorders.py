@@ -234,7 +234,7 @@ def test_the_palette_card_shows_every_element_in_its_colours(tmp_path, monkeypat
     looks = ruleset.looks
     with Image.open("card.png") as card:
         assert card.height == ROW * (len(ruleset.elements) + 1) + 8
-        for row, element in enumerate(ruleset.listed, start=1):
+        for row, element in enumerate(ruleset.by_id, start=1):
             centre = row * ROW + 2 + SWATCH // 2
             for x, group in zip(card_layout(ruleset), (looks.normal, looks.scorched, looks.glow)):
                 for j, index in enumerate(group[element.index]):

@@ -333,7 +333,7 @@ def list_(as_json, provenance, mod_dirs) -> None:
                 {"mod": o.mod, "file": o.file, "line": o.line, "changes": {k: [a, b] for k, a, b in o.changes}} for o in e.history
             ],
         }
-        for e in ruleset.listed
+        for e in ruleset.by_id
     ]
     reactions = [
         {
@@ -364,7 +364,7 @@ def _provenance(ruleset) -> None:
     """Each element, the mod (and plugin) that defined it, and every override with what it changed."""
     plugin_of = {m.name: m.plugin for m in ruleset.mods}
     file_of = {m.name: m.source.name for m in ruleset.mods}
-    for e in ruleset.listed:
+    for e in ruleset.by_id:
         origin = e.origin
         like = f", like {e.spec.like}" if e.spec.like else ""
         click.echo(printable(f"{e.id}: defined by {origin} ({file_of[origin]}, plugin {plugin_of[origin]}){like}"))

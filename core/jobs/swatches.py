@@ -38,7 +38,7 @@ def swatch_card(ruleset: Ruleset):
     labels = ((shades_x, "shades"), (scorched_x, "scorched"), (glow_x, "hot"), (text_x, "element"), (kind_x, "moves as"))
     for x, label in labels:
         draw.text((x, 4), label, fill=MUTED, font=font)
-    for row, element in enumerate(ruleset.listed, start=1):
+    for row, element in enumerate(ruleset.by_id, start=1):
         top = row * ROW + 2
         for x, indices in ((shades_x, looks.normal), (scorched_x, looks.scorched), (glow_x, looks.glow)):
             for j, index in enumerate(indices[element.index]):

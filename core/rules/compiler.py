@@ -157,7 +157,7 @@ class Ruleset:
 
     #: The mods loaded, in load order.
     mods: tuple[LoadedMod, ...]
-    #: Every element, by number (0 is ``base:empty``; :attr:`listed` is by id).
+    #: Every element, by number (0 is ``base:empty``; :attr:`by_id` is by id).
     elements: tuple[ElementInfo, ...]
     #: Every reaction, compiled.
     reactions: tuple[CompiledReaction, ...]
@@ -177,7 +177,7 @@ class Ruleset:
         return self._ids[PARTICLE_ID]
 
     @property
-    def listed(self) -> tuple[ElementInfo, ...]:
+    def by_id(self) -> tuple[ElementInfo, ...]:
         """Every element, the empty cell first, then by id: the order to show them in."""
         return self.elements[:1] + tuple(sorted(self.elements[1:], key=lambda e: e.id))
 

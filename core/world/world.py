@@ -540,7 +540,7 @@ class World:
         """
         cells = self.shown() if carried else self.cells
         numbers = np.bincount(cells.ravel(), minlength=len(self.ruleset.elements))
-        return {e.id: int(numbers[e.index]) for e in self.ruleset.listed if numbers[e.index]}
+        return {e.id: int(numbers[e.index]) for e in self.ruleset.by_id if numbers[e.index]}
 
     def shown(self) -> np.ndarray:
         """The element each cell shows: its own, or for a particle, what it carries."""
