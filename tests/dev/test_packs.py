@@ -46,6 +46,17 @@ def test_a_world_of_few_elements_steps_the_same_with_500_more_loaded(packs):
     assert len(many.ruleset.elements) > 500 and same_cells(few, many)
 
 
+def test_a_hot_element_glows_with_500_more_loaded(packs):
+    ruleset = load_ruleset(None, [packs])
+    world = World(ruleset, 12, 3)
+    bar = np.zeros((3, 12), bool)
+    bar[1, 1:11] = True
+    world.paint(bar, ruleset.index("stone"))
+    world.set_temperature(bar, 1200.0)
+    stone = ruleset.index("stone")
+    assert (world.image()[bar] == ruleset.looks.glow[stone, 2]).all()  # (1200 - 525) // 300: yellow-white
+
+
 def test_a_world_of_pack_elements_renders(packs, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "w.toml").write_text(
