@@ -19,7 +19,7 @@ from sandmod.rules.compiler import (
     TEMP_ONE,
     pair_reaction,
 )
-from sandmod.engine.layout import UNIQUE_BITS, mask_bit
+from sandmod.engine.layout import SIDES, UNIQUE_BITS, mask_bit
 from sandmod.errors import ProblemsError
 from sandmod.engine.hashing import ROLL_ONE
 from sandmod.world.loading import load_ruleset
@@ -116,6 +116,46 @@ def test_reactions_fill_the_matrix_both_ways(ruleset):
     assert (forward.into_a, forward.into_b) == (i("steam"), water)
     assert (backward.into_a, backward.into_b) == (water, i("steam"))
     assert t.react_pair[fire, water] != t.react_pair[water, fire]  # a row for each side: it reads a then b
+
+
+def test_where_limits_a_reaction_to_sides_seen_from_each_cell(ruleset):
+    """The tap pours only below itself: seen from the empty cell, the tap is above it."""
+    t, i = ruleset.tables, ruleset.index
+    tap = i("tap")
+    assert pair_reaction(t, tap, 0, "below").into_b == i("water")
+    assert [pair_reaction(t, tap, 0, side) for side in ("right", "left", "above")] == [None] * 3
+    assert pair_reaction(t, 0, tap, "above").into_a == i("water")
+    assert [pair_reaction(t, 0, tap, side) for side in ("right", "left", "below")] == [None] * 3
+    assert [pair_reaction(t, i("fire"), i("water"), side) for side in SIDES] == [pair_reaction(t, i("fire"), i("water"))] * 4
+
+
+def test_two_reactions_of_one_pair_on_different_sides_both_apply(registry, tmp_path):
+    mods = write_mods(tmp_path / "mods", {"g.toml": """
+        [mod]
+        name = "g"
+        [elements.seed]
+        archetype = "static"
+        color = "#30a030"
+        [elements.root]
+        archetype = "static"
+        color = "#805020"
+        [[reactions]]
+        a = "seed"
+        b = "empty"
+        b_becomes = "seed"
+        where = ["above"]
+        chance = 1
+        [[reactions]]
+        a = "seed"
+        b = "empty"
+        b_becomes = "root"
+        where = ["below", "sides"]
+        chance = 0.5
+        """})
+    rs = load_ruleset(["g"], [mods], registry=registry)
+    seed = rs.index("seed")
+    assert pair_reaction(rs.tables, seed, 0, "above").into_b == seed
+    assert {pair_reaction(rs.tables, seed, 0, side).into_b for side in ("below", "left", "right")} == {rs.index("root")}
 
 
 def test_a_reaction_is_one_row_whatever_its_selectors_match(ruleset):

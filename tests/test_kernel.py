@@ -123,3 +123,39 @@ def test_a_rising_gas_moves_at_most_its_terminal_speed(ruleset):
         world.step()
         heights.append(int(np.nonzero(world.cells == smoke)[0][0]))
     assert max(-np.diff(heights)) <= ruleset.tables.max_speed[smoke] // 256
+
+
+def test_a_reaction_limited_to_one_side_grows_only_that_way(registry, tmp_path):
+    """A seed that turns the empty cell above it into seed grows a straight stalk upwards; one that
+    also sprouts roots below and beside it (another reaction, other sides) grows those too."""
+    from conftest import write_mods
+    from sandmod.world.loading import load_ruleset
+
+    growth = """
+        [mod]
+        name = "g"
+        [elements.seed]
+        archetype = "static"
+        color = "#30a030"
+        [elements.root]
+        archetype = "static"
+        color = "#805020"
+        [[reactions]]
+        a = "seed"
+        b = "empty"
+        b_becomes = "seed"
+        where = ["above"]
+        chance = 1
+        """
+    legend = {".": "empty", "s": "seed", "r": "root", "#": "stone"}
+    stalk = load_ruleset(["g"], [write_mods(tmp_path / "a", {"g.toml": growth})], registry=registry)
+    world = run(make_world(stalk, [".....", ".....", ".....", "..s..", "#####"], legend), 5)
+    assert as_rows(world, legend) == ["..s..", "..s..", "..s..", "..s..", "#####"]
+    roots = growth + '[[reactions]]\na = "seed"\nb = "empty"\nb_becomes = "root"\nwhere = ["below", "sides"]\nchance = 1\n'
+    both = load_ruleset(["g"], [write_mods(tmp_path / "b", {"g.toml": roots})], registry=registry)
+    scene = ["." * 40, ".s.." * 10, "." * 40]
+    rows = as_rows(run(make_world(both, scene, legend), 1), legend)
+    for x in range(1, 40, 4):  # each seed reacted with one neighbour (once a frame): a seed above, or a root elsewhere
+        grown = {(rows[0][x], "above"), (rows[1][x - 1], "left"), (rows[1][x + 1], "right"), (rows[2][x], "below")} - {(".", s) for s in ("above", "left", "right", "below")}
+        assert len(grown) == 1 and next(iter(grown)) in {("s", "above"), ("r", "left"), ("r", "right"), ("r", "below")}, (x, rows)
+    assert "s" in rows[0] and "r" in rows[1] + rows[2]

@@ -34,6 +34,8 @@ HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
 ALWAYS = 255
 #: Tables.react_into_a/b: the cell stays the element it is (a reaction row serves every pair it matches).
 STAYS = 0xFFFF
+#: Where a neighbour lies, by the kernel's numbers for it (Tables.react_group's columns): x + 1, y + 1, x - 1, y - 1.
+SIDES = ("right", "below", "left", "above")
 #: Most elements loaded at once: ids and what a particle carries are uint16, below STAYS.
 MAX_ELEMENTS = 4096
 #: The element masks (Tables.reactive and displaces, the elements present in a region): elements

@@ -64,7 +64,10 @@ def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
         if not _inside(nx, ny, width, height) or (flags[_at(ny, nx)] & REACTED) != 0:
             continue
         b = cells[_at(ny, nx)]
-        row = t.react_pair[e, b]
+        group = t.react_pair[e, b]
+        if group == 0:
+            continue
+        row = t.react_group[group, d]  # the reaction of b on this side of the cell
         if row == 0:
             continue
         threshold = t.react_chance[row]

@@ -505,6 +505,13 @@ class Reaction(_Strict):
         "(then the one of the mod loaded later; see the reactions how-to).",
         examples=[1],
     )
+    where: list[Literal["above", "below", "left", "right", "sides"]] | None = Field(
+        None,
+        min_length=1,
+        description="The sides of the first cell the second may lie on ('sides': left and right); every side if left "
+        "out. A tap fills only the cell below it; a seed grows only upwards.",
+        examples=[["below"]],
+    )
 
     @model_validator(mode="after")
     def _changes_something(self) -> "Reaction":

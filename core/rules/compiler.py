@@ -42,6 +42,7 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     MAX_ELEMENTS,
     MAX_TEMPERATURE,
     MIN_TEMPERATURE,
+    SIDES,
     STAYS,
     SUBCELL,
     TEMP_ONE,
@@ -76,7 +77,8 @@ class Tables(NamedTuple):
     reactive: np.ndarray  # int64[n]: partner mask: bit b % 64 set when the element reacts with some b (0: none)
     displace: np.ndarray  # uint8[n, n]: chance (of ALWAYS) that a moving cell of a trades places with a cell of b; 0: never
     displaces: np.ndarray  # int64[n]: mask: bit b % 64 set when a may swap with some b (a first test, like reactive)
-    react_pair: np.ndarray  # uint16[n, n]: the reaction (a row of the react_ tables) of a cell of a touching one of b; 0: none
+    react_pair: np.ndarray  # uint16[n, n]: the reactions (a row of react_group) of a cell of a touching one of b; 0: none
+    react_group: np.ndarray  # uint16[g, 4]: per side the neighbour lies on (SIDES), its reaction: a row of the tables below; 0: none
     react_chance: np.ndarray  # uint32[r]: roll threshold per frame of contact (row 0, no reaction: 0)
     react_into_a: np.ndarray  # uint16[r]: what a becomes; STAYS: it stays as it is
     react_into_b: np.ndarray  # uint16[r]: what b becomes; STAYS: it stays as it is
@@ -461,6 +463,7 @@ def _empty_tables(n: int) -> Tables:
         displace=np.zeros((n, n), np.uint8),
         displaces=np.zeros(n, np.int64),
         react_pair=np.zeros((n, n), np.uint16),
+        react_group=np.zeros((1, len(SIDES)), np.uint16),
         **_reaction_rows([NO_REACTION]),
         heat_cap=np.ones(n, np.int64),
         heat_recip=np.ones(n, np.int64),
@@ -551,24 +554,35 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, b
             first, second = (STAYS if into is None else into for into in (into_a, into_b))
             forward, backward = (first, second, *rest), (second, first, *rest)
             rank = (score_a + score_b, reaction.priority)
+            sides = _sides(reaction.where)
             for i in sorted(set_a):
                 for j in sorted(set_b):
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
-                    claim((i, j), (out_i, out_j, *rest), forward, rank, mod, number)
-                    if i != j:  # the same contact, seen from the other cell
-                        claim((j, i), (out_j, out_i, *rest), backward, rank, mod, number)
+                    for d in sides:
+                        claim((i, j, d), (out_i, out_j, *rest), forward, rank, mod, number)
+                        opposite = (d + 2) % len(SIDES)  # the same contact, seen from the other cell
+                        if i != j or opposite not in sides:  # (of one element: whichever looks first is a)
+                            claim((j, i, opposite), (out_j, out_i, *rest), backward, rank, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
                 )
             )
-    rows = {NO_REACTION: 0}
-    for pair, (*_, row) in winner.items():
-        t.react_pair[pair] = rows.setdefault(row, len(rows))
+    rows, groups, sided = {NO_REACTION: 0}, {(0,) * len(SIDES): 0}, {}
+    for (i, j, d), (*_, row) in winner.items():
+        sided.setdefault((i, j), [0] * len(SIDES))[d] = rows.setdefault(row, len(rows))
+    for pair, group in sided.items():
+        t.react_pair[pair] = groups.setdefault(tuple(group), len(groups))
     t.reactive[:] = element_masks(t.react_pair)
-    problems.extend(_endless_reactions(winner, elements))
-    return tuple(compiled), t._replace(**_reaction_rows(list(rows)))
+    problems.extend(_endless_reactions({key[:2]: held for key, held in winner.items()}, elements))
+    return tuple(compiled), t._replace(**_reaction_rows(list(rows)), react_group=np.array(list(groups), np.uint16))
+
+
+def _sides(where: list[str] | None) -> list[int]:
+    """The kernel's numbers of the sides (:data:`SIDES`) a reaction's b cell may lie on, seen from a."""
+    named = {side for w in where or SIDES for side in (("left", "right") if w == "sides" else (w,))}
+    return [d for d, side in enumerate(SIDES) if side in named]
 
 
 #: Row 0 of the reaction tables: what a pair without a reaction reads.
@@ -586,9 +600,11 @@ class PairReaction(NamedTuple):
     heat: int  # temperature added to a cell that changes, TEMP_ONE units
 
 
-def pair_reaction(t: Tables, a: int, b: int) -> PairReaction | None:
-    """The reaction of a cell of element ``a`` touching one of ``b``, or None."""
-    row = int(t.react_pair[a, b])
+def pair_reaction(t: Tables, a: int, b: int, side: str | None = None) -> PairReaction | None:
+    """The reaction of a cell of element ``a`` touching one of ``b`` on ``side`` (one of :data:`SIDES`;
+    None: the first side it reacts on), or None."""
+    rows = [int(r) for r in t.react_group[t.react_pair[a, b]]]
+    row = rows[SIDES.index(side)] if side is not None else next((r for r in rows if r), 0)
     if row == 0:
         return None
     into_a, into_b = (int(t.react_into_a[row]), int(t.react_into_b[row]))
