@@ -99,12 +99,13 @@ def test_the_kernel_and_the_compiler_give_an_element_the_same_mask_bit():
 
 
 def test_the_elements_most_react_with_are_numbered_first_and_listed_by_id(ruleset):
-    """Acid eats nearly everything, so it is a partner of the most elements: it gets a mask bit of its own."""
+    """Acid eats nearly everything and a fan blows everything, so they are partners of the most elements:
+    they get mask bits of their own."""
     assert ruleset.elements[0].id == "base:empty"
     assert [e.index for e in ruleset.elements] == list(range(len(ruleset.elements)))
     partners = (ruleset.tables.react_pair > 0).sum(axis=0)
     assert list(partners[1:]) == sorted(partners[1:], reverse=True)
-    assert ruleset.elements[1].id == "acid:acid"
+    assert {e.id for e in ruleset.elements[1:3]} == {"acid:acid", "machines:fan"}
     assert [e.id for e in ruleset.by_id[1:]] == sorted(e.id for e in ruleset.elements[1:])
 
 
@@ -156,6 +157,15 @@ def test_two_reactions_of_one_pair_on_different_sides_both_apply(registry, tmp_p
     seed = rs.index("seed")
     assert pair_reaction(rs.tables, seed, 0, "above").into_b == seed
     assert {pair_reaction(rs.tables, seed, 0, side).into_b for side in ("below", "left", "right")} == {rs.index("root")}
+
+
+def test_a_push_flies_the_cell_pushed_whichever_cell_looks(ruleset):
+    """Seen from the fan, the sand above it flies (push_b); seen from the sand, the sand itself (push_a)."""
+    t, i = ruleset.tables, ruleset.index
+    fan, sand = i("fan"), i("sand")
+    assert pair_reaction(t, fan, sand, "above")[-2:] == (0, round(2.5 * SUBCELL))
+    assert pair_reaction(t, sand, fan, "below")[-2:] == (round(2.5 * SUBCELL), 0)
+    assert pair_reaction(t, fan, sand, "below") is None and t.particle[0] == ruleset.particle
 
 
 def test_a_reaction_is_one_row_whatever_its_selectors_match(ruleset):

@@ -159,3 +159,21 @@ def test_a_reaction_limited_to_one_side_grows_only_that_way(registry, tmp_path):
         grown = {(rows[0][x], "above"), (rows[1][x - 1], "left"), (rows[1][x + 1], "right"), (rows[2][x], "below")} - {(".", s) for s in ("above", "left", "right", "below")}
         assert len(grown) == 1 and next(iter(grown)) in {("s", "above"), ("r", "left"), ("r", "right"), ("r", "below")}, (x, rows)
     assert "s" in rows[0] and "r" in rows[1] + rows[2]
+
+
+def test_a_fan_lifts_sand_and_the_sand_lands_again(ruleset):
+    """Grains on the fan fly up as particles carrying sand (none lost), well above it; with the fan
+    turned to stone they all land again."""
+    legend = {".": "empty", "S": "sand", "F": "fan", "#": "stone"}
+    scene = [".........."] * 14 + ["...SSSS..."] + ["...FFFF..."] + ["##########"]
+    world = make_world(ruleset, scene, legend)
+    highest = len(scene)
+    for _ in range(60):
+        world.step()
+        assert world.counts(carried=True)["sand:sand"] == 4
+        flying = np.argwhere(world.shown() == ruleset.index("sand"))[:, 0]
+        highest = min(highest, flying.min())
+    assert highest <= 15 - 6  # six cells or more above where it lay
+    world.paint(world.cells == ruleset.index("fan"), ruleset.index("stone"))
+    run(world, 80)
+    assert world.counts()["sand:sand"] == 4 and (world.cells == ruleset.particle).sum() == 0

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cells import FRESH, MOVED, _at, _bit, _cell_key, _inside, _mix32, _temperature, become
+from .cells import FRESH, GAS, LIQUID, MOVED, POWDER, _at, _bit, _cell_key, _energy, _inside, _mix32, _temperature, become
 from .jit import inlined
 from .layout import BURNING, REACTED, STAYS
 
@@ -91,5 +91,36 @@ def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
             stir = True
         flags[_at(y, x)] |= REACTED
         flags[_at(ny, nx)] |= REACTED
-        return into_a != e, busy, stir, born
+        flew = False
+        if t.react_push_b[row] != 0 and _pushable(t, into_b):
+            born |= fly(s, t, nx, ny, into_b, t.react_push_b[row], d)
+            stir = True
+        if t.react_push_a[row] != 0 and _pushable(t, into_a):
+            born |= fly(s, t, x, y, into_a, t.react_push_a[row], (d + 2) & 3)
+            stir = flew = True
+        return into_a != e or flew, busy, stir, born
     return False, busy, stir, born
+
+
+@inlined
+def _pushable(t, e):
+    """Can a cell of element e be pushed: is it a powder, a liquid or a gas?"""
+    kind = t.archetype[e]
+    return kind == POWDER or kind == LIQUID or kind == GAS
+
+
+@inlined
+def fly(s, t, x, y, cargo, speed, d):
+    """Cell (x, y), of element ``cargo``, flies off towards side ``d`` (see layout.SIDES) at ``speed``
+    (SUBCELL units) as ``t.particle[0]`` carrying it: its shade and temperature kept, its lifetime
+    dropped, done for the frame. Returns the particle's bit, for the mask of elements present."""
+    particle = t.particle[0]
+    temperature = _temperature(int(s.heat[_at(y, x)]), t.heat_recip[cargo])
+    s.cells[_at(y, x)] = particle
+    s.carry[_at(y, x)] = cargo
+    s.vx[_at(y, x)] = speed * (1, 0, -1, 0)[d]
+    s.vy[_at(y, x)] = speed * (0, 1, 0, -1)[d]
+    s.timer[_at(y, x)] = 0
+    s.heat[_at(y, x)] = _energy(temperature, t.heat_cap[particle])
+    s.flags[_at(y, x)] = MOVED | REACTED
+    return _bit(particle)

@@ -512,11 +512,19 @@ class Reaction(_Strict):
         "out. A tap fills only the cell below it; a seed grows only upwards.",
         examples=[["below"]],
     )
+    push: float | None = Field(
+        None,
+        gt=0.0,
+        le=MAX_SPEED,
+        description="The second cell flies off, away from the first, at this speed (cells per frame), as a particle "
+        "carrying what it is (then becomes): a fan. A static cell, an empty one or a particle is not pushed.",
+        examples=[2.5],
+    )
 
     @model_validator(mode="after")
     def _changes_something(self) -> "Reaction":
-        if self.a_becomes is None and self.b_becomes is None:
-            raise ValueError("a reaction needs a_becomes, b_becomes or both")
+        if self.a_becomes is None and self.b_becomes is None and self.push is None:
+            raise ValueError("a reaction needs a_becomes, b_becomes, push or more than one")
         if self.min_temperature is not None and self.max_temperature is not None and self.min_temperature > self.max_temperature:
             raise ValueError("min_temperature must not be above max_temperature")
         return self

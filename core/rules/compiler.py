@@ -85,6 +85,9 @@ class Tables(NamedTuple):
     react_tsum_min: np.ndarray  # int32[r]: lowest T_a + T_b (TEMP_ONE units) at which the pair reacts
     react_tsum_max: np.ndarray  # int32[r]: highest T_a + T_b
     react_heat: np.ndarray  # int32[r]: temperature added to a cell that changes, TEMP_ONE units
+    react_push_a: np.ndarray  # int32[r]: a flies off, away from b, at this speed (SUBCELL units), as particle[0]; 0: it stays
+    react_push_b: np.ndarray  # int32[r]: b flies off, away from a
+    particle: np.ndarray  # uint16[1]: base:particle, what pushed cells fly as
     # Heat. A cell stores its heat energy, capacity x temperature.
     heat_cap: np.ndarray  # int64[n]: heat capacity, CAP_ONE units
     heat_recip: np.ndarray  # int64[n]: 2**32 / heat_cap, so that temperature = (energy * recip) >> 32
@@ -260,6 +263,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.carries[info.index] = what
     _fill_displacement(t, elements)
     reactions, t = _compile_reactions(mods, elements, t, resolve, problems, warnings, below)
+    t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
@@ -464,6 +468,7 @@ def _empty_tables(n: int) -> Tables:
         displaces=np.zeros(n, np.int64),
         react_pair=np.zeros((n, n), np.uint16),
         react_group=np.zeros((1, len(SIDES)), np.uint16),
+        particle=np.zeros(1, np.uint16),
         **_reaction_rows([NO_REACTION]),
         heat_cap=np.ones(n, np.int64),
         heat_recip=np.ones(n, np.int64),
@@ -552,7 +557,8 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, b
             high = 2**31 - 1 if reaction.max_temperature is None else 2 * temperature_units(reaction.max_temperature)
             rest = (threshold, low, high, temperature_units(reaction.heat))
             first, second = (STAYS if into is None else into for into in (into_a, into_b))
-            forward, backward = (first, second, *rest), (second, first, *rest)
+            push = round((reaction.push or 0) * SUBCELL)
+            forward, backward = (first, second, *rest, 0, push), (second, first, *rest, push, 0)
             rank = (score_a + score_b, reaction.priority)
             sides = _sides(reaction.where)
             for i in sorted(set_a):
@@ -560,10 +566,10 @@ def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, b
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
                     for d in sides:
-                        claim((i, j, d), (out_i, out_j, *rest), forward, rank, mod, number)
+                        claim((i, j, d), (out_i, out_j, *rest, 0, push), forward, rank, mod, number)
                         opposite = (d + 2) % len(SIDES)  # the same contact, seen from the other cell
                         if i != j or opposite not in sides:  # (of one element: whichever looks first is a)
-                            claim((j, i, opposite), (out_j, out_i, *rest), backward, rank, mod, number)
+                            claim((j, i, opposite), (out_j, out_i, *rest, push, 0), backward, rank, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
@@ -586,7 +592,7 @@ def _sides(where: list[str] | None) -> list[int]:
 
 
 #: Row 0 of the reaction tables: what a pair without a reaction reads.
-NO_REACTION = (STAYS, STAYS, 0, -(2**31), 2**31 - 1, 0)
+NO_REACTION = (STAYS, STAYS, 0, -(2**31), 2**31 - 1, 0, 0, 0)
 
 
 class PairReaction(NamedTuple):
@@ -598,6 +604,8 @@ class PairReaction(NamedTuple):
     tsum_min: int  # lowest T_a + T_b, TEMP_ONE units
     tsum_max: int
     heat: int  # temperature added to a cell that changes, TEMP_ONE units
+    push_a: int  # speed a flies off at, SUBCELL units (0: it stays)
+    push_b: int
 
 
 def pair_reaction(t: Tables, a: int, b: int, side: str | None = None) -> PairReaction | None:
@@ -609,15 +617,17 @@ def pair_reaction(t: Tables, a: int, b: int, side: str | None = None) -> PairRea
         return None
     into_a, into_b = (int(t.react_into_a[row]), int(t.react_into_b[row]))
     return PairReaction(int(t.react_chance[row]), a if into_a == STAYS else into_a, b if into_b == STAYS else into_b,
-                        int(t.react_tsum_min[row]), int(t.react_tsum_max[row]), int(t.react_heat[row]))
+                        int(t.react_tsum_min[row]), int(t.react_tsum_max[row]), int(t.react_heat[row]),
+                        int(t.react_push_a[row]), int(t.react_push_b[row]))
 
 
 def _reaction_rows(rows: Sequence[tuple]) -> dict[str, np.ndarray]:
-    """The react_ tables (but react_pair) of these rows: (a becomes, b becomes, threshold, lowest
-    and highest T sum, heat) each, STAYS for a cell that stays."""
+    """The react_ tables (but react_pair and react_group) of these rows: (a becomes, b becomes, threshold,
+    lowest and highest T sum, heat, a's push, b's push) each, STAYS for a cell that stays."""
     columns = list(zip(*rows))
     names_types = (("react_into_a", np.uint16), ("react_into_b", np.uint16), ("react_chance", np.uint32),
-                   ("react_tsum_min", np.int32), ("react_tsum_max", np.int32), ("react_heat", np.int32))
+                   ("react_tsum_min", np.int32), ("react_tsum_max", np.int32), ("react_heat", np.int32),
+                   ("react_push_a", np.int32), ("react_push_b", np.int32))
     return {name: np.array(column, kind) for (name, kind), column in zip(names_types, columns)}
 
 
@@ -655,7 +665,7 @@ def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Pr
 
     always = {
         pair: (first, second)
-        for pair, (_, _, _, (first, second, _, low, high, _), _) in winner.items()
+        for pair, (_, _, _, (first, second, _, low, high, *_), _) in winner.items()
         if low <= every[0] and high >= every[1] and (first, second) != pair and all(stuck(e) for e in (*pair, first, second))
     }
     problems: list[Problem] = []
