@@ -177,3 +177,21 @@ def test_a_fan_lifts_sand_and_the_sand_lands_again(ruleset):
     world.paint(world.cells == ruleset.index("fan"), ruleset.index("stone"))
     run(world, 80)
     assert world.counts()["sand:sand"] == 4 and (world.cells == ruleset.particle).sum() == 0
+
+
+def test_a_powder_of_negative_gravity_rises_as_a_body_and_piles_on_the_ceiling(registry, tmp_path):
+    from conftest import write_mods
+    from sandmod.world.loading import load_ruleset
+    from test_scenes import alternating_rows
+
+    anti = '[mod]\nname = "anti"\n[elements.antisand]\narchetype = "powder"\ncolor = "#8ac3dc"\ndensity = 1600\ngravity = -0.2\n'
+    ruleset = load_ruleset(["anti"], [write_mods(tmp_path / "mods", {"anti.toml": anti})], registry=registry)
+    e = ruleset.index("antisand")
+    assert ruleset.tables.fall_dir[e] == -1 and ruleset.tables.accel[e] == round(0.2 * 256)
+    legend = {".": "empty", "A": "antisand", "#": "stone"}
+    world = make_world(ruleset, ["#" * 30] + ["#" + "." * 28 + "#"] * 30 + ["#" + "." * 11 + "A" * 6 + "." * 11 + "#"] * 6 + ["#" * 30], legend)
+    for _ in range(100):
+        world.step()
+        assert alternating_rows(world.cells, e) <= 3  # no comb while it rises
+    rows = (world.cells == e).sum(axis=1)
+    assert rows[1:6].sum() == 36 and rows[1] > rows[2] > 0  # all against the ceiling, widest there: a heap upside down

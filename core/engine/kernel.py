@@ -190,7 +190,7 @@ def _fast_cells(s, t, y, sx0, sx1, n, forward, present, exchange_key, knock_key,
         vy[_at(ty, x)] = 0
         flags[_at(ty, x)] = MOVED | LOOSE | (f & CARRIED)  # sinking: it may slide where it lands
         if ry == y:  # nothing followed it: the grains diagonally above may, if knocked loose
-            knock(s, t, x, y, x, ty, knock_key, 2, 4)
+            knock(s, t, x, y, x, ty, 2 * y - ty, knock_key, 2, 4)
         busy_box = _box_with(busy_box, x, x, ry, ty)
         if stir:
             stir_box = _box_with(stir_box, x, x, ry, ty)

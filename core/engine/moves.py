@@ -177,7 +177,7 @@ def slump(s, t, e, x, y, ty, side, exchange_key, knock_key, forward, x0, y0, x1,
     s.vx[_at(ty, qx)] = 0
     s.vy[_at(ty, qx)] = 0
     s.flags[_at(ty, qx)] = MOVED | marks
-    knock(s, t, x, y, qx, ty, knock_key, 2, 4)
+    knock(s, t, x, y, qx, ty, 2 * y - ty, knock_key, 2, 4)
     return True, stir, True
 
 
@@ -350,23 +350,24 @@ def land(s, t, x, y, e, spawn_key):
 
 
 @inlined
-def knock(s, t, x, y, px, py, knock_key, first, last):
+def knock(s, t, x, y, px, py, back, knock_key, first, last):
     """A move from (x, y) to (px, py) knocks resting grains loose, each by its chance: those that
     could follow into the vacated cell (pushed towards it) and those beside the arrival (pushed
     away); of these six (beside the vacated cell, diagonally above it, beside the arrival) the
     ``first`` to the ``last`` - 1. A grain that sinks into a fluid with nothing following it
     knocks only the two diagonally above the cell it left (the fluid damps the rest): so a heap
-    under water slumps."""
+    under water slumps. ``back``: the row of grains that could follow into the vacated cell, the
+    one above it (below it, where a grain that falls upwards left it)."""
     cells, flags = s.cells, s.flags
     height, width = cells.shape
     if (
         x > 0
-        and y > 0
+        and _within(back, height)
         and px > 0
         and x + 1 < width
         and px + 1 < width
         and (
-            flags[_at(y, x - 1)] & flags[_at(y, x + 1)] & flags[_at(y - 1, x - 1)] & flags[_at(y - 1, x + 1)]
+            flags[_at(y, x - 1)] & flags[_at(y, x + 1)] & flags[_at(back, x - 1)] & flags[_at(back, x + 1)]
             & flags[_at(py, px - 1)] & flags[_at(py, px + 1)] & LOOSE
         )
         != 0
@@ -375,7 +376,7 @@ def knock(s, t, x, y, px, py, knock_key, first, last):
     for k in range(first, last):
         if k < 4:
             nx = x + (-1, 1, -1, 1)[k]
-            ny = y - (0, 0, 1, 1)[k]
+            ny = (y, y, back, back)[k]
             push = (1, -1, 1, -1)[k]
         else:
             nx = px + (-1, 1)[k - 4]
@@ -542,8 +543,10 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
             d0x, d0y, cvy = falling_moves(h, waver, kind, g, t.accel[e], t.max_speed[e], cvx, cvy)
             d1y = g  # if the drift is blocked: straight on, one cell
             tries = 2
-    elif g > 0 and cvy > 0 and _within(ty, height) and vy[_at(ty, x)] > 0 and t.archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
-        return True, False, np.int64(0), x, y, y  # the cell below falls too and has not had its turn (another tile's): wait for it
+    elif (g > 0 or kind == POWDER) and g * cvy > 0 and _within(ty, height) and g * vy[_at(ty, x)] > 0 and t.archetype[cells[_at(ty, x)]] != STATIC and (flags[_at(ty, x)] & DONE) == 0:
+        # The cell ahead falls too and has not had its turn (another tile's, or, for a grain that falls
+        # upwards, a row the sweep reaches later): wait for it.
+        return True, False, np.int64(0), x, y, y
     elif kind == GAS and _within(ty, height) and vy[_at(ty, x)] != 0 and t.fall_dir[cells[_at(ty, x)]] == g and t.archetype[cells[_at(ty, x)]] == GAS and (flags[_at(ty, x)] & DONE) == 0:
         return True, False, np.int64(0), x, y, y  # the gas ahead rises (sinks) and has yet to move: wait to follow it (follow_run)
     elif kind == POWDER:
@@ -588,7 +591,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         # Heat stays even where two cells of one temperature trade places and neither cools.
         stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(py, px)]), t.heat_cap[entered], t.cooling[entered], ambient)
         swap(s, x, y, px, py, kind == PARTICLE)
-        if kind == GAS and py != y:  # a gas rose (sank): the gas behind it follows
+        if (kind == GAS or g < 0) and py != y:  # a gas rose (sank), a grain rose: the cells behind it follow
             ry, followed = follow_run(s, t, x, y, g, abs(py - y) if px == x else 1, cvy, exchange_key, ambient)
             stir = stir or followed
     vx[_at(py, px)] = cvx
@@ -599,7 +602,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
             born = land(s, t, px, py, e, spawn_key)
             stir = True
     elif entered == 0:
-        knock(s, t, x, y, px, py, knock_key, 0, 6)
+        knock(s, t, x, y, px, py, y - g if kind == POWDER else y - 1, knock_key, 0, 6)
     elif ry == y:  # sank, and no run followed it into the cell it left
-        knock(s, t, x, y, px, py, knock_key, 2, 4)
+        knock(s, t, x, y, px, py, y - g if kind == POWDER else y - 1, knock_key, 2, 4)
     return True, stir, born, px, py, ry

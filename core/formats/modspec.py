@@ -341,13 +341,13 @@ _DISPERSION = Field(
 )
 
 
-def _gravity(default: float, **more) -> object:
+def _gravity(default: float, ge: float = 0.0, also: str = "", **more) -> object:
     return Field(
         default,
         **more,
-        ge=0.0,
+        ge=ge,
         le=2.0,
-        description="Acceleration while falling (gases: while rising), in cells per frame per frame.",
+        description=f"Acceleration while falling (gases: while rising), in cells per frame per frame{also}.",
     )
 
 
@@ -385,7 +385,7 @@ class PowderElement(_ElementBase):
 
     archetype: Literal["powder"]
     density: float = _DENSITY
-    gravity: float = _gravity(0.2, examples=[0.1])
+    gravity: float = _gravity(0.2, ge=-2.0, also="; negative: it falls upwards and piles on ceilings", examples=[0.1])
     max_speed: float = _max_speed(8.0, examples=[4])
     friction: float = Field(
         0.6,

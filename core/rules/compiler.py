@@ -303,7 +303,7 @@ def _fill_element(t: Tables, info: ElementInfo, d: "Definition", problems: list[
         problems.append(d.source.problem(d.loc + ("archetype",), f"only '{EMPTY_ID}' may be 'empty'"))
     t.dispersion[i] = getattr(spec, "dispersion", 0)
     t.rest_chance[i] = chance_threshold(getattr(spec, "viscosity", 0.0))
-    t.accel[i] = round(getattr(spec, "gravity", 0.0) * SUBCELL)
+    t.accel[i] = round(abs(getattr(spec, "gravity", 0.0)) * SUBCELL)  # along fall_dir: a powder of negative gravity rises
     t.max_speed[i] = round(getattr(spec, "max_speed", 1.0) * SUBCELL)
     t.friction[i] = round(getattr(spec, "friction", 0.0) * 256)
     t.impact_share[i] = round(getattr(spec, "impact_spread", 0.0) * 256)
@@ -388,7 +388,7 @@ def blast_row(explosion, leaves: int, x: int = 0, y: int = 0) -> np.ndarray:
 def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
     """Which way movers fall (+1 falls, -1 rises) and who may trade places with whom, how eagerly.
 
-    Powders and liquids fall; gases rise, or fall if heavier than the air
+    Powders and liquids fall (a powder of negative gravity rises); gases rise, or fall if heavier than the air
     (``base:empty``'s density). A mover may trade places with a fluid (liquid
     or gas) lighter than itself when falling, denser when rising, each frame
     by :func:`exchange_chance`, which grows with the gap in their densities.
@@ -402,7 +402,9 @@ def _fill_displacement(t: Tables, elements: Sequence[ElementInfo]) -> None:
     densities = np.array([getattr(e.spec, "density", np.inf) for e in elements])
     for e in elements:
         kind = e.spec.archetype
-        if kind in ("powder", "liquid") or (kind == "gas" and e.spec.density > air):
+        if kind == "powder" and e.spec.gravity < 0:
+            t.fall_dir[e.index] = -1
+        elif kind in ("powder", "liquid") or (kind == "gas" and e.spec.density > air):
             t.fall_dir[e.index] = 1
         elif kind == "gas":
             t.fall_dir[e.index] = -1
