@@ -108,7 +108,7 @@ def test_a_valid_mod_parses_into_its_archetype():
             "m.toml:6:1: reactions.0.b: must be an element ('water'), a tag ('#metal'), '*', or one of those after '!' "
             "(got '#wet stuff')",
         ),
-        ('[[reactions]]\na = "x"\nb = "y"\nchance = 0.5\n', "m.toml:4:1: reactions.0: a reaction needs a_becomes, b_becomes, push or more than one"),
+        ('[[reactions]]\na = "x"\nb = "y"\nchance = 0.5\n', "m.toml:4:1: reactions.0: a reaction needs a_becomes, b_becomes or push"),
         (
             '[elements.fog]\narchetype = "gas"\ncolor = "#eeeeee"\ndensity = 1\ndispersion = 2\n'
             'lifetime = { frames = 0, becomes = "empty" }\n',

@@ -524,7 +524,7 @@ class Reaction(_Strict):
     @model_validator(mode="after")
     def _changes_something(self) -> "Reaction":
         if self.a_becomes is None and self.b_becomes is None and self.push is None:
-            raise ValueError("a reaction needs a_becomes, b_becomes, push or more than one")
+            raise ValueError("a reaction needs a_becomes, b_becomes or push")
         if self.min_temperature is not None and self.max_temperature is not None and self.min_temperature > self.max_temperature:
             raise ValueError("min_temperature must not be above max_temperature")
         return self
