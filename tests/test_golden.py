@@ -21,14 +21,15 @@ from test_chunks import digest
 #: change nothing). Recorded anew when a resting grain came to slump into a fluid diagonally below
 #: it (the hourglass ran out), a liquid to sink into a lighter powder, the gas behind a rising gas
 #: to follow it in its run and a gas to waver by its plume block's roll (no comb), and lava to set
-#: into falling basalt instead of static stone.
+#: into falling basalt instead of static stone; written anew, the same frames, when the digest came to
+#: name elements by their ids (a bundled mod that adds an element no longer changes them).
 GOLDEN = {
-    ("mix", 96): "31f6bda3b240a5e010e9396b8e04fb888704e5f31978a8b5d3cee7ac10a56d2c",
-    ("halves", 96): "c12805703f3c9c9224011547637fc4687e2e6f0db972b300191a26d2916d3661",
-    ("everything", 96): "eb149aad0577151c19410e9e9922d54b0fd77171d18468d7911649962c87db70",
-    ("mix", 272): "2a510e4736c0bb3d1203084b9f9e45f7e13e5c78b7442bcfcbfabbbc30687fc7",
-    ("halves", 272): "e9af47355540a57fc7d5ab8e82b0cdcdb8dd6c89a8f002692a2051aefc30704a",
-    ("everything", 272): "cb36ab7219256aa64ef956ab09cd071e3902324db12a2a9469519794eac53823",
+    ("mix", 96): "3ed9455839a9f985294f3d9c12602cc87d28cfe13300e00c963e9bbecb8811c8",
+    ("halves", 96): "6c61dd0cc6be28738018eb7825e4bc12e896bdfad3e0b5e97d68cdf63529efb8",
+    ("everything", 96): "d9a337eb92dbdb09056feab7125fdeac31e4d2ee64b147a93f3e588d47620192",
+    ("mix", 272): "cccca06f7462fc3c81cdb0c86f241cbf0a78a8d6577b97d989e7cea84320acd0",
+    ("halves", 272): "fb60448e57a90d26014f348bbfc8e9c5ba272c21a750787ae03ba0fef922f126",
+    ("everything", 272): "5840e8faf21d841e13272a113ba5455ca9172b52b5d2bf32740e8654f5029f5b",
 }
 
 
