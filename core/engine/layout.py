@@ -34,6 +34,10 @@ HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
 ALWAYS = 255
 #: Tables.react_into_a/b: the cell stays the element it is (a reaction row serves every pair it matches).
 STAYS = 0xFFFF
+#: Tables.breaks_into: the element names nothing to break into (a blast destroys its cells as any other's).
+NO_BREAK = 0xFFFF
+#: Tables.impact: no landing breaks it (faster than any cell moves).
+NO_IMPACT = 1 << 30
 #: Most elements loaded at once: ids and what a particle carries are uint16, below STAYS.
 MAX_ELEMENTS = 4096
 #: The element masks (Tables.reactive and displaces, the elements present in a region): elements
