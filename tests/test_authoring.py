@@ -311,17 +311,17 @@ def test_worlds_record_their_mods_and_warn_when_they_differ(tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     assert invoke("new", "world", "w", "--mod", "sand", "--size", "32", "32").exit_code == 0
     data = tomllib.loads((tmp_path / "w.toml").read_text())
-    assert data["world"]["made_with"] == {"base": "1.1.0", "glass": "1.1.0", "sand": "1.1.0"}
+    assert data["world"]["made_with"] == {"base": "1.2.0", "glass": "1.2.0", "sand": "1.1.0"}
     assert data["emitters"][0]["element"] == "sand:sand"
     clean = invoke("validate", "w.toml")
     assert clean.exit_code == 0 and clean.stderr == ""
-    text = (tmp_path / "w.toml").read_text().replace('sand = "1.1.0"', 'sand = "1.0.0"').replace('glass = "1.1.0"\n', "")
+    text = (tmp_path / "w.toml").read_text().replace('sand = "1.1.0"', 'sand = "1.0.0"').replace('glass = "1.2.0"\n', "")
     (tmp_path / "w.toml").write_text(text)
     result = invoke("validate", "w.toml")
     assert result.exit_code == 0
     assert result.stderr.splitlines() == [
         "warning: w.toml:11:1: world.made_with.sand: made with mod sand 1.0.0; loading sand 1.1.0",
-        "warning: w.toml:9:1: world.made_with: mod glass 1.1.0 is loaded but the world was not made with it",
+        "warning: w.toml:9:1: world.made_with: mod glass 1.2.0 is loaded but the world was not made with it",
     ]
 
 

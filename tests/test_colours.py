@@ -43,13 +43,13 @@ def looks_of(ruleset, name: str) -> list[np.ndarray]:
 
 
 def test_an_element_looks_the_same_with_3_elements_and_with_300(few, many):
-    assert len(few.elements) == 4 and len(many.elements) == 304
+    assert len(few.elements) == 5 and len(many.elements) == 305
     for name in ("iron", "stone", "empty"):
         for mine, theirs in zip(looks_of(few, name), looks_of(many, name)):
             assert (mine == theirs).all(), name
     shades, scorched, glow = looks_of(many, "iron")
     assert len(np.unique(shades, axis=0)) == 8 and len(np.unique(scorched, axis=0)) == 4 and len(np.unique(glow, axis=0)) == 3
-    assert len(many.colours) == 8 + 303 * 15 and many.looks.normal.max() >= 256
+    assert len(many.colours) == 8 + 304 * 15 and many.looks.normal.max() >= 256
 
 
 def test_a_bar_of_iron_at_1200_degrees_glows_with_300_elements_loaded(many):

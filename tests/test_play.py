@@ -413,7 +413,7 @@ def test_a_tab_shows_its_section_as_labelled_swatches_and_a_click_takes_one():
     play = Play(Session.open(None, size=(64, 48)), scale=SCALE, fixed_steps=1)
     ruleset, view = play.session.world.ruleset, play.view
     click(play, rect_of(play, "section", "liquids"))
-    liquids = [e for e in offered(ruleset) if ruleset.elements[e].spec.archetype == "liquid"]
+    liquids = [e for e in offered(ruleset) if ruleset.elements[e].spec.menu_category == "liquids"]  # nitroglycerin is with the explosives
     shown = [(rect, what) for rect, (kind, what) in view.menu_items(play.menu) if kind == "element"]
     assert play.menu.current().name == "liquids" and [what for _, what in shown] == liquids
     screen = pygame.surfarray.array3d(view.screen).transpose(1, 0, 2)
@@ -454,12 +454,14 @@ def test_the_keys_move_through_sections_elements_and_pages():
     key(play, pygame.K_TAB)
     key(play, pygame.K_TAB)
     powders = [ruleset.elements[e].id for e in menu.current().elements]
-    assert powders == ["fire:ash", "lava:basalt", "coal:coal", "dirt:dirt", "sand:sand"]
-    key(play, pygame.K_PERIOD)  # after sand, the last: round to the first
+    assert powders == ["fire:ash", "lava:basalt", "coal:coal", "dirt:dirt", "base:rubble", "sand:sand", "glass:shards"]
+    key(play, pygame.K_PERIOD)  # after sand, shards
+    assert play.brush.element == ruleset.index("glass:shards")
+    key(play, pygame.K_PERIOD)  # after shards, the last: round to the first
     assert play.brush.element == ruleset.index("fire:ash")
     key(play, pygame.K_COMMA)
     key(play, pygame.K_COMMA)
-    assert play.brush.element == ruleset.index("dirt:dirt")
+    assert play.brush.element == ruleset.index("sand:sand")
     menu.per_page = 2  # pages, as a window too narrow for a section would have
     key(play, pygame.K_PAGEDOWN)
     assert menu.page == 1 and menu.on_page() == menu.current().elements[2:4]

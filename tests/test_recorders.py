@@ -240,4 +240,4 @@ def test_the_palette_card_shows_every_element_in_its_colours(tmp_path, monkeypat
                 for j, index in enumerate(group[element.index]):
                     assert card.getpixel((x + j * SWATCH + SWATCH // 2, centre)) == tuple(ruleset.colours[index])
     Path("w.toml").write_text(WORLD.replace("height = 20", 'height = 20\nmods = ["sand"]'))
-    assert invoke("palette", "w.toml", "-o", "few.png").stdout == "wrote few.png: 5 elements\n"  # base: empty, particle, stone; sand needs glass
+    assert invoke("palette", "w.toml", "-o", "few.png").stdout == "wrote few.png: 7 elements\n"  # base: empty, particle, stone, rubble; sand needs glass (and its shards)

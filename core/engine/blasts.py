@@ -21,6 +21,7 @@ from .layout import (
     CHUNK_SHIFT,
     DETONATING,
     LOOSE,
+    NO_BREAK,
     SCORCHED,
     TILE,
     TILE_SHIFT,
@@ -146,10 +147,11 @@ def _rays(cells, resistance, cx, cy, radius, strength, scorch):
 
 @compiled
 def _blast(s, t, blast, mark, blast_key, particle):
-    """Change the cells a blast marked: destroyed powder and liquid cells may fly off as particles
-    (away from the centre, fastest near it), other destroyed cells become what the blast leaves
-    (by its chance) or nothing; scorched cells darken, with a chance that falls off across the
-    fringe. Every cell it touches is heated to at least the blast's heat."""
+    """Change the cells a blast marked: a destroyed cell whose element breaks (``breaks_into``) is
+    taken for what it breaks into; destroyed powder and liquid cells may fly off as particles
+    (away from the centre, fastest near it), other destroyed cells become what they broke into, or
+    else what the blast leaves (by its chance) or nothing; scorched cells darken, with a chance that
+    falls off across the fringe. Every cell it touches is heated to at least the blast's heat."""
     cells, flags, heat = s.cells, s.flags, s.heat
     cx, cy, radius, scorch = blast[BLAST_X], blast[BLAST_Y], blast[BLAST_RADIUS], blast[BLAST_SCORCH]
     leaves, leaves_chance, fling = blast[BLAST_LEAVES], blast[BLAST_LEAVES_CHANCE], blast[BLAST_FLING]
@@ -169,6 +171,9 @@ def _blast(s, t, blast, mark, blast_key, particle):
             roll = h >> 8
             warmth = max(_temperature(int(heat[qy, qx]), t.heat_recip[c]), hot)
             if m == DESTROYED:
+                broken = t.breaks_into[c] != NO_BREAK
+                if broken:
+                    c = t.breaks_into[c]  # what is left of it: flung or left as any destroyed cell is, never `leaves`
                 kind = t.archetype[c]
                 if (kind == POWDER or kind == LIQUID) and roll < fling:
                     dist = np.sqrt(float(ox * ox + oy * oy))
@@ -185,7 +190,8 @@ def _blast(s, t, blast, mark, blast_key, particle):
                     flags[qy, qx] = 0
                     heat[qy, qx] = _energy(warmth, t.heat_cap[particle])
                 else:
-                    become(s, t, qx, qy, leaves if (_mix32(h) >> 8) < leaves_chance else 0, warmth, LOOSE, h)
+                    into = c if broken else (leaves if (_mix32(h) >> 8) < leaves_chance else 0)
+                    become(s, t, qx, qy, into, warmth, LOOSE, h)
             elif roll % (scorch + 1) < scorch - (m - FRINGE):  # scorched: chance (scorch - d) / (scorch + 1)
                 flags[qy, qx] |= SCORCHED
                 heat[qy, qx] = _energy(warmth, t.heat_cap[c])

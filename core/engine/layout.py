@@ -36,6 +36,10 @@ ALWAYS = 255
 STAYS = 0xFFFF
 #: Where a neighbour lies, by the kernel's numbers for it (Tables.react_group's columns): x + 1, y + 1, x - 1, y - 1.
 SIDES = ("right", "below", "left", "above")
+#: Tables.breaks_into: the element names nothing to break into (a blast destroys its cells as any other's).
+NO_BREAK = 0xFFFF
+#: Tables.impact: no landing breaks it (faster than any cell moves).
+NO_IMPACT = 1 << 30
 #: Most elements loaded at once: ids and what a particle carries are uint16, below STAYS.
 MAX_ELEMENTS = 4096
 #: The element masks (Tables.reactive and displaces, the elements present in a region): elements

@@ -52,12 +52,13 @@ from .cells import (
     _spawn_state,
     _temperature,
     _within,
+    become,
     swap,
 )
 from .chunks import _unvisited
 from .heat import _cooling_loss, stirs
 from .jit import compiled, inlined
-from .layout import ALWAYS, BURNING, FLAMMABLE, IGNITES, LOOSE, SUBCELL
+from .layout import ALWAYS, BURNING, EXPLOSIVE, FLAMMABLE, IGNITES, LOOSE, SUBCELL
 
 # Powder on landing: its impact_share of the landing speed becomes sideways
 # speed, and at least MIN_SLIDE; sideways speed below STOP_SPEED comes to rest.
@@ -350,6 +351,55 @@ def land(s, t, x, y, e, spawn_key):
 
 
 @inlined
+def _impact_speed(s, x, ty, g, vy):
+    """How hard a mover falling at ``vy`` (along g) lands on the cell at (x, ty): its speed less that of
+    the cell, where that falls the same way too; the world's edge stands still."""
+    if not _within(ty, s.cells.shape[0]):
+        return vy * g
+    return vy * g - max(int(s.vy[_at(ty, x)]) * g, 0)
+
+
+@inlined
+def lands_hard(s, t, e, x, ty, g, vy):
+    """Does a mover of element e at speed ``vy`` land on the cell at (x, ty), one it can never enter (or
+    the world's edge), fast enough to break it or itself (``Tables.impact``)? (Plunging into a fluid
+    it may enter, only the fluid can break: see :func:`move`.)"""
+    if not _within(ty, s.cells.shape[0]):
+        return vy * g >= t.impact[e]
+    o = s.cells[_at(ty, x)]
+    if t.displace[e, o] != 0:
+        return False  # it will sink into it: no landing
+    speed = _impact_speed(s, x, ty, g, vy)
+    return speed >= t.impact[e] or speed >= t.impact[o]
+
+
+@inlined
+def shatter(s, t, x, y, c, spawn_key):
+    """The cell at (x, y), of element c, is struck hard enough to break: an explosive is lit (it goes off
+    on its own turn, :func:`~.fire.heat_and_fire`), anything else becomes its ``breaks_into``, at its
+    temperature, loose and done for the frame. Returns the bit of what it became (0 when lit)."""
+    if (t.thermal[c] & EXPLOSIVE) != 0:
+        s.flags[_at(y, x)] |= BURNING
+        return np.int64(0)
+    warmth = _temperature(int(s.heat[_at(y, x)]), t.heat_recip[c])
+    return become(s, t, x, y, t.breaks_into[c], warmth, MOVED | LOOSE, _cell_key(spawn_key, x, y))
+
+
+@inlined
+def smash(s, t, x, y, e, ty, g, vy, spawn_key):
+    """A mover of element e at (x, y) landed hard on the cell at (x, ty) (see :func:`lands_hard`): each of
+    the two the landing speed reaches breaks (:func:`shatter`). A mover that stays whole keeps its speed,
+    to fall on where what it broke gives way. Returns the bits of what they broke into."""
+    speed = _impact_speed(s, x, ty, g, vy)
+    born = np.int64(0)
+    if _within(ty, s.cells.shape[0]) and speed >= t.impact[s.cells[_at(ty, x)]]:
+        born |= shatter(s, t, x, ty, s.cells[_at(ty, x)], spawn_key)
+    if speed >= t.impact[e]:
+        born |= shatter(s, t, x, y, e, spawn_key)
+    return born
+
+
+@inlined
 def knock(s, t, x, y, px, py, back, knock_key, first, last):
     """A move from (x, y) to (px, py) knocks resting grains loose, each by its chance: those that
     could follow into the vacated cell (pushed towards it) and those beside the arrival (pushed
@@ -481,6 +531,8 @@ def follow_run(s, t, x, y, g, k, vy, run_key, ambient):
 @inlined
 def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, forward, x0, y0, x1, y1, frame, ambient):
     """Phase 4: choose up to four moves by the archetype, walk them, settle the velocity, and swap.
+    A mover that lands hard (:func:`lands_hard`), or plunges hard into a fluid that breaks, breaks
+    what the speed reaches (:func:`smash`, :func:`shatter`) instead, and stays put this frame.
     Returns (busy, stir, born, px, py, ry): as the other phases' (see :mod:`.fire`), where the
     mover ended up, and the farthest row a run that followed it reached (y where none did)."""
     cells, vx, vy, flags = s.cells, s.vx, s.vy, s.flags
@@ -501,6 +553,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
             return False, False, np.int64(0), x, y, y
     busy = False
     opens = False
+    plunge = False  # into a fluid below, fast enough to break it (see lands_hard)
     if kind != PARTICLE and _within(ty, height):
         o = cells[_at(ty, x)]
         threshold = t.displace[e, o]
@@ -508,6 +561,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         if not opens and threshold != 0:
             way = _way_into_cell(s, t, kind, threshold, x, ty, False, old_vy != 0, exchange_key, x, y, forward, x0, y0, x1, y1, frame)
             opens = way == OPEN
+            plunge = opens and g * old_vy > 0 and o != 0 and _impact_speed(s, x, ty, g, old_vy) >= t.impact[o]
             if way == WAIT:
                 busy = True
                 if kind == POWDER:
@@ -533,6 +587,8 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         loose = 0  # set when it lands
         d0x, d0y, cvx, cvy = particle_moves(h, t.accel[e], t.drag_keep[e], t.max_speed[e], cvx, cvy)
         tries = 1 if d0x != 0 or d0y != 0 else 0
+    elif plunge:  # the fluid breaks (an explosive is lit) instead of giving way; the mover keeps its speed
+        return True, True, shatter(s, t, x, ty, cells[_at(ty, x)], spawn_key), x, y, y
     elif opens:
         falling = True
         loose = LOOSE
@@ -549,6 +605,8 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
         return True, False, np.int64(0), x, y, y
     elif kind == GAS and _within(ty, height) and vy[_at(ty, x)] != 0 and t.fall_dir[cells[_at(ty, x)]] == g and t.archetype[cells[_at(ty, x)]] == GAS and (flags[_at(ty, x)] & DONE) == 0:
         return True, False, np.int64(0), x, y, y  # the gas ahead rises (sinks) and has yet to move: wait to follow it (follow_run)
+    elif g * old_vy > 0 and lands_hard(s, t, e, x, ty, g, old_vy):  # a landing (rare), and a hard one (rarer)
+        return True, True, smash(s, t, x, y, e, ty, g, old_vy, spawn_key), x, y, y
     elif kind == POWDER:
         if loose == 0:  # resting: stays put until the cell below opens or it is knocked, or slumps into a fluid
             side = slump_side(cells, t.displace, e, x, y, ty, 1 if forward else -1)

@@ -303,6 +303,23 @@ class _ElementBase(_Strict):
         description="What a blast ray must spend to destroy a cell; more than the ray has left stops it. "
         "Default: 0 for empty, gases and particles, 0.5 for powders and liquids, 2 for static solids.",
     )
+    breaks_into: ElementName | None = Field(
+        None,
+        description="What a cell of it becomes when it breaks: where a blast would destroy it, it is left as this "
+        "instead (flung, if a powder or liquid, as destroyed cells are), and so where it lands, or is landed on, at "
+        "'breaks_on_impact'. Stone breaks into 'rubble', glass into 'shards'. Without it, a blast destroys the cell.",
+        examples=["shards"],
+    )
+    breaks_on_impact: float | None = Field(
+        None,
+        gt=0.0,
+        le=MAX_SPEED,
+        description="A landing speed in cells per frame: a cell of it that lands this fast or faster on what it cannot "
+        "sink into (or on the world's edge), or that a moving cell lands on this hard (less the speed it falls at "
+        "itself), breaks into 'breaks_into', or, an explosive, goes off. A fall from rest at gravity 0.2 reaches 2.5 "
+        "after about 20 cells, 3 after about 26 (nitroglycerin: 2.5; glass: 3). Without it, no landing breaks it.",
+        examples=[3],
+    )
     ignites: bool = Field(False, description="It lights flammable cells it touches (fire, lava).")
     extinguishes: bool = Field(False, description="It puts out burning cells it touches (water).")
 
@@ -315,6 +332,13 @@ class _ElementBase(_Strict):
         if self.explosion is not None and self.flammable is None:
             raise ValueError("an explosive element needs 'flammable' (ignites_at, catch_chance) to say when it goes off")
         return self
+
+    @field_validator("breaks_on_impact")
+    @classmethod
+    def _breaks_into_something(cls, value: float | None, info) -> float | None:
+        if value is not None and info.data.get("breaks_into") is None and info.data.get("explosion") is None:
+            raise ValueError("an element that breaks on impact needs 'breaks_into' (what it breaks into) or an 'explosion' (it goes off)")
+        return value
 
     @property
     def menu_category(self) -> str:

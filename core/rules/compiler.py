@@ -43,6 +43,8 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     MAX_TEMPERATURE,
     MIN_TEMPERATURE,
     SIDES,
+    NO_BREAK,
+    NO_IMPACT,
     STAYS,
     SUBCELL,
     TEMP_ONE,
@@ -118,6 +120,9 @@ class Tables(NamedTuple):
     # Explosions.
     resistance: np.ndarray  # int64[n]: explosion resistance, 1/256ths
     blast: np.ndarray  # int64[n, BLAST_COLUMNS]: the element's explosion (radius 0: none)
+    # Breaking.
+    breaks_into: np.ndarray  # uint16[n]: what a cell becomes where a blast destroys it or a hard landing breaks it; NO_BREAK: none
+    impact: np.ndarray  # int32[n]: landing speed (SUBCELL units, less the landed-on cell's) that breaks it, or sets it off; NO_IMPACT: none
 
 
 @dataclass(frozen=True)
@@ -251,7 +256,8 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.life_frames[info.index] = info.spec.lifetime.frames
                 t.life_jitter[info.index] = info.spec.lifetime.jitter
                 t.life_into[info.index] = into
-        _fill_heat(t, info, lambda ref, *field: resolve(ref, mod, d.loc + field))
+        named = lambda ref, *field: resolve(ref, mod, d.loc + field)  # noqa: E731
+        _fill_heat(t, info, named)
         if info.index == 0 and any(getattr(info.spec, f) for f in ("heated", "cooled", "flammable", "ignites", "extinguishes")):
             problems.append(d.source.problem(d.loc, "the empty cell cannot change, burn, light or put out fires"))
         carried = getattr(info.spec, "carries", None)
@@ -261,6 +267,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 problems.append(d.source.problem(d.loc + ("carries",), f"a particle cannot carry a particle ('{elements[what].id}')"))
             elif what is not None:
                 t.carries[info.index] = what
+        _fill_breaking(t, info, elements, named, lambda message: problems.append(d.source.problem(d.loc + ("breaks_into",), message)))
     _fill_displacement(t, elements)
     reactions, t = _compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
@@ -368,6 +375,23 @@ def _fill_heat(t: Tables, info: ElementInfo, resolve) -> None:
     if spec.explosion is not None:
         t.thermal[i] |= EXPLOSIVE
         t.blast[i] = blast_row(spec.explosion, resolve(spec.explosion.leaves, "explosion", "leaves") or 0)
+
+
+def _fill_breaking(t: Tables, info: ElementInfo, elements: Sequence[ElementInfo], resolve, problem) -> None:
+    """What a cell of one element breaks into, and the landing speed that breaks it (or sets it off);
+    ``resolve(ref, *field)`` names others, ``problem(message)`` reports one at ``breaks_into``."""
+    spec, i = info.spec, info.index
+    if spec.breaks_into is not None and (into := resolve(spec.breaks_into, "breaks_into")) is not None:
+        if i == 0:
+            problem("the empty cell cannot break")
+        elif into == i:
+            problem(f"'{info.id}' cannot break into itself")
+        elif elements[into].spec.archetype == "particle":
+            problem(f"an element cannot break into a particle ('{elements[into].id}')")
+        else:
+            t.breaks_into[i] = into
+    if spec.breaks_on_impact is not None and (t.breaks_into[i] != NO_BREAK or t.thermal[i] & EXPLOSIVE):
+        t.impact[i] = round(spec.breaks_on_impact * SUBCELL)
 
 
 def blast_row(explosion, leaves: int, x: int = 0, y: int = 0) -> np.ndarray:
@@ -499,6 +523,8 @@ def _empty_tables(n: int) -> Tables:
         extinguishes=np.zeros(n, np.uint8),
         resistance=np.zeros(n, np.int64),
         blast=np.zeros((n, BLAST_COLUMNS), np.int64),
+        breaks_into=np.full(n, NO_BREAK, np.uint16),
+        impact=np.full(n, NO_IMPACT, np.int32),
     )
 
 
