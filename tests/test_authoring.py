@@ -106,8 +106,8 @@ def test_requires_with_version_ranges(registry, tmp_path):
         return []
 
     assert problems('"water>=2.0,<3", "sand >= 1.1"') == []
-    assert problems('"water<2"') == ["m.toml:3:1: mod.requires.0: requires mod 'water<2', but mods/water.toml is version 2.1.0"]
-    assert problems('"sand", "water==1.0"') == ["m.toml:3:1: mod.requires.1: requires mod 'water==1.0', but mods/water.toml is version 2.1.0"]
+    assert problems('"water<2"') == ["m.toml:3:1: mod.requires.0: requires mod 'water<2', but mods/water.toml is version 2.2.0"]
+    assert problems('"sand", "water==1.0"') == ["m.toml:3:1: mod.requires.1: requires mod 'water==1.0', but mods/water.toml is version 2.2.0"]
     with pytest.raises(ProblemsError) as caught:
         find_mods(registry, [write_mods(tmp_path / "bad", {"m.toml": '[mod]\nname = "m"\nrequires = ["water>>2"]\n'})])
     assert str(caught.value).endswith("mod.requires.0: '>>2' is not a version range like '>=2.0,<3', '~=2.1' or '==2.*'")

@@ -192,7 +192,7 @@ def test_list_json():
 def test_validate_accepts_good_files_and_reports_every_bad_one():
     result = invoke("validate", str(EXAMPLES / "hourglass.toml"), str(EXAMPLES / "acid_wall.toml"))
     assert result.exit_code == 0, result.output
-    assert result.stdout.startswith("ok: 13 mods") and result.stdout.rstrip().endswith("2 worlds")
+    assert result.stdout.startswith("ok: 14 mods") and result.stdout.rstrip().endswith("2 worlds")
     write_mods(
         Path("mods"),
         {

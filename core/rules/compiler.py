@@ -780,9 +780,11 @@ def _glow_energies(glow_from: list[int], glow_step: int, heat_recip: list[int]) 
 
 
 def _colours(elements: Sequence[ElementInfo], heat_recip: np.ndarray) -> tuple[np.ndarray, Looks]:
-    """Every colour a cell can show (uint8 (colours, 3)), and each element's indices into it: its
-    shades, darker scorched shades and glow levels, in element order. The empty cell (air) gets
-    shades only: it neither scorches nor glows (its scorched and glow indices are its first shade).
+    """Every colour a cell can show (uint8 (colours, 3)), and each element's indices into it: every
+    element's shades first, in element order, then their darker scorched shades, then their glow
+    levels (so that a format of few colours that takes them in order takes what most cells show
+    first). The empty cell (air) gets shades only: it neither scorches nor glows (its scorched and
+    glow indices are its first shade).
     """
     n = len(elements)
     # An element hot by nature (lava, fire) already looks hot: it glows only when hotter still.
@@ -800,13 +802,13 @@ def _colours(elements: Sequence[ElementInfo], heat_recip: np.ndarray) -> tuple[n
         rows.extend(colours)
         return np.arange(len(rows) - len(colours), len(rows))
 
-    for info in elements:
-        shades = _element_colours(info.spec)
+    made = [_element_colours(info.spec) for info in elements]
+    for info, shades in zip(elements, made):
         looks.normal[info.index] = add(shades[:SHADES])
-        if info.index == 0:
-            looks.scorched[0], looks.glow[0] = looks.normal[0, 0], looks.normal[0, 0]
-            continue
+    looks.scorched[0], looks.glow[0] = looks.normal[0, 0], looks.normal[0, 0]
+    for info, shades in zip(elements[1:], made[1:]):
         looks.scorched[info.index] = add(shades[SHADES : SHADES + SCORCHED_SHADES])
+    for info, shades in zip(elements[1:], made[1:]):
         looks.glow[info.index] = add(shades[SHADES + SCORCHED_SHADES :])
     return np.clip(np.round(rows), 0, 255).astype(np.uint8), looks
 
