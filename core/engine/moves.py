@@ -57,7 +57,7 @@ from .cells import (
 )
 from .chunks import _unvisited
 from .heat import _cooling_loss, stirs
-from .jit import compiled, inlined
+from .jit import compiled, in_place, inlined
 from .layout import ALWAYS, BURNING, EXPLOSIVE, FLAMMABLE, IGNITES, LOOSE, SUBCELL
 
 # Powder on landing: its impact_share of the landing speed becomes sideways
@@ -373,7 +373,7 @@ def lands_hard(s, t, e, x, ty, g, vy):
     return speed >= t.impact[e] or speed >= t.impact[o]
 
 
-@inlined
+@in_place  # rare (a hard landing): called, not copied into the cell update, which compiles faster so
 def shatter(s, t, x, y, c, spawn_key):
     """The cell at (x, y), of element c, is struck hard enough to break: an explosive is lit (it goes off
     on its own turn, :func:`~.fire.heat_and_fire`), anything else becomes its ``breaks_into``, at its
@@ -385,7 +385,7 @@ def shatter(s, t, x, y, c, spawn_key):
     return become(s, t, x, y, t.breaks_into[c], warmth, MOVED | LOOSE, _cell_key(spawn_key, x, y))
 
 
-@inlined
+@in_place  # rare (a hard landing): called, not copied into the cell update, which compiles faster so
 def smash(s, t, x, y, e, ty, g, vy, spawn_key):
     """A mover of element e at (x, y) landed hard on the cell at (x, ty) (see :func:`lands_hard`): each of
     the two the landing speed reaches breaks (:func:`shatter`). A mover that stays whole keeps its speed,

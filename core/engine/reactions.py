@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .cells import FRESH, GAS, LIQUID, MOVED, POWDER, _at, _bit, _cell_key, _energy, _inside, _mix32, _temperature, become
-from .jit import inlined
+from .jit import in_place, inlined
 from .layout import BURNING, REACTED, STAYS
 
 
@@ -109,7 +109,7 @@ def _pushable(t, e):
     return kind == POWDER or kind == LIQUID or kind == GAS
 
 
-@inlined
+@in_place  # rare (a push): called, not copied into the cell update, which compiles faster so
 def fly(s, t, x, y, cargo, speed, d):
     """Cell (x, y), of element ``cargo``, flies off towards side ``d`` (see layout.SIDES) at ``speed``
     (SUBCELL units) as ``t.particle[0]`` carrying it: its shade and temperature kept, its lifetime
