@@ -63,6 +63,26 @@ def walls_mod(name: str, count: int, more: str = "") -> str:
     return f'[mod]\nname = "{name}"\n\n{more}\n{walls}'
 
 
+#: A mod whose seed grows a stalk upwards (a reaction on one side); with SEED_ROOTS, roots below and beside it too.
+SEED = """
+[mod]
+name = "g"
+[elements.seed]
+archetype = "static"
+color = "#30a030"
+[elements.root]
+archetype = "static"
+color = "#805020"
+[[reactions]]
+a = "seed"
+b = "empty"
+b_becomes = "seed"
+where = ["above"]
+chance = 1
+"""
+SEED_ROOTS = SEED + '[[reactions]]\na = "seed"\nb = "empty"\nb_becomes = "root"\nwhere = ["below", "sides"]\nchance = 1\n'
+
+
 def make_world(ruleset: Ruleset, rows: list[str], legend: dict[str, str] = LEGEND, seed: int = 0) -> World:
     """A world painted from text rows, one character per cell."""
     world = World(ruleset, len(rows[0]), len(rows), seed)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import write_mods
+from conftest import SEED_ROOTS, write_mods
 from sandmod.rules.compiler import (
     ARCHETYPE_CODES,
     BLAST_RADIUS,
@@ -131,28 +131,7 @@ def test_where_limits_a_reaction_to_sides_seen_from_each_cell(ruleset):
 
 
 def test_two_reactions_of_one_pair_on_different_sides_both_apply(registry, tmp_path):
-    mods = write_mods(tmp_path / "mods", {"g.toml": """
-        [mod]
-        name = "g"
-        [elements.seed]
-        archetype = "static"
-        color = "#30a030"
-        [elements.root]
-        archetype = "static"
-        color = "#805020"
-        [[reactions]]
-        a = "seed"
-        b = "empty"
-        b_becomes = "seed"
-        where = ["above"]
-        chance = 1
-        [[reactions]]
-        a = "seed"
-        b = "empty"
-        b_becomes = "root"
-        where = ["below", "sides"]
-        chance = 0.5
-        """})
+    mods = write_mods(tmp_path / "mods", {"g.toml": SEED_ROOTS})
     rs = load_ruleset(["g"], [mods], registry=registry)
     seed = rs.index("seed")
     assert pair_reaction(rs.tables, seed, 0, "above").into_b == seed

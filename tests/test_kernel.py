@@ -128,31 +128,14 @@ def test_a_rising_gas_moves_at_most_its_terminal_speed(ruleset):
 def test_a_reaction_limited_to_one_side_grows_only_that_way(registry, tmp_path):
     """A seed that turns the empty cell above it into seed grows a straight stalk upwards; one that
     also sprouts roots below and beside it (another reaction, other sides) grows those too."""
-    from conftest import write_mods
+    from conftest import SEED, SEED_ROOTS, write_mods
     from sandmod.world.loading import load_ruleset
 
-    growth = """
-        [mod]
-        name = "g"
-        [elements.seed]
-        archetype = "static"
-        color = "#30a030"
-        [elements.root]
-        archetype = "static"
-        color = "#805020"
-        [[reactions]]
-        a = "seed"
-        b = "empty"
-        b_becomes = "seed"
-        where = ["above"]
-        chance = 1
-        """
     legend = {".": "empty", "s": "seed", "r": "root", "#": "stone"}
-    stalk = load_ruleset(["g"], [write_mods(tmp_path / "a", {"g.toml": growth})], registry=registry)
+    stalk = load_ruleset(["g"], [write_mods(tmp_path / "a", {"g.toml": SEED})], registry=registry)
     world = run(make_world(stalk, [".....", ".....", ".....", "..s..", "#####"], legend), 5)
     assert as_rows(world, legend) == ["..s..", "..s..", "..s..", "..s..", "#####"]
-    roots = growth + '[[reactions]]\na = "seed"\nb = "empty"\nb_becomes = "root"\nwhere = ["below", "sides"]\nchance = 1\n'
-    both = load_ruleset(["g"], [write_mods(tmp_path / "b", {"g.toml": roots})], registry=registry)
+    both = load_ruleset(["g"], [write_mods(tmp_path / "b", {"g.toml": SEED_ROOTS})], registry=registry)
     scene = ["." * 40, ".s.." * 10, "." * 40]
     rows = as_rows(run(make_world(both, scene, legend), 1), legend)
     for x in range(1, 40, 4):  # each seed reacted with one neighbour (once a frame): a seed above, or a root elsewhere
