@@ -22,6 +22,13 @@ MAX_TEMPERATURE = 9999.0
 SUBCELL = 256
 #: Temperatures are fixed-point: this many units make one degree Celsius.
 TEMP_ONE = 16
+
+
+def temperature_units(celsius: float) -> int:
+    """Degrees Celsius in the kernel's fixed point."""
+    return round(celsius * TEMP_ONE)
+
+
 #: Heat capacities are fixed-point: this many units make a heat_capacity of 1.
 CAP_ONE = 256
 #: Columns of a blast row (Tables.blast, and the world's queue of explosions).

@@ -3,7 +3,7 @@
 A cell shows its element's colour in its own shade (a particle shows what it
 carries); a scorched cell a darker shade; a cell hotter than its element's
 glow point glows red, orange, then yellow-white, a level every GLOW_STEP
-degrees (see :class:`sandmod.rules.compiler.Looks`): an index into the
+degrees (see :class:`sandmod.rules.colours.Looks`): an index into the
 ruleset's ``colours``, which :func:`rgb` turns into RGB. The heat view shows every
 cell's temperature instead, on one colour scale for all elements.
 
@@ -52,7 +52,7 @@ def _units(energy, recip):
 @njit(cache=True)
 def colour_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorched, glow, glow_from, glow_step, glow_energy, chunks, out):
     """Write every cell's colour index into ``out`` (uint16, the world's shape); ``chunks``: a
-    mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.rules.compiler.Looks.glow_energy`."""
+    mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.rules.colours.Looks.glow_energy`."""
     height, width = cells.shape
     shades, scorched_shades, levels = normal.shape[1], scorched.shape[1], glow.shape[1]
     every = chunks.shape[0] == 0

@@ -3,11 +3,12 @@
 Element ids are ``mod:element``. Numeric ids are given here, in a fixed order
 (``base:empty`` is 0, then those that most elements react with first, then by
 id), and never written into files.
-Reactions become rows (what each cell of a touching pair becomes, and the
-chance per frame) and an n x n table of which row each pair reads (2 bytes a
-pair); densities and archetypes become a displacement matrix (which element
-may trade places with which, and how eagerly; 1 byte a pair). At the most
-elements, 4,096, the two take 48 MB; at 500, under a megabyte.
+Reactions become rows (:mod:`.reactions`: what each cell of a touching pair
+becomes, and the chance per frame) and an n x n table of which rows each
+pair reads (2 bytes a pair); densities and archetypes become a displacement
+matrix (which element may trade places with which, and how eagerly; 1 byte a
+pair). At the most elements, 4,096, the two take 48 MB; at 500, under a
+megabyte. Colours are :mod:`.colours`'s.
 """
 
 from __future__ import annotations
@@ -40,20 +41,19 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     HEATED,
     IGNITES,
     MAX_ELEMENTS,
-    MAX_TEMPERATURE,
-    MIN_TEMPERATURE,
     SIDES,
     NO_BREAK,
     NO_IMPACT,
-    STAYS,
     SUBCELL,
     TEMP_ONE,
-    mask_bit,
+    temperature_units,
 )
+from .colours import SCORCH_DARKEN, SCORCHED_SHADES, SHADES, Looks, colour_table  # noqa: F401  (names the other modules take from here too)
 from .definitions import Definition, Override, collect_definitions, required_below, resolve_name
 from .glow import GLOW_COLOURS, GLOW_FROM, GLOW_MIX, GLOW_STEP  # noqa: F401  (names the other modules take from here too)
 from .modset import LoadedMod
-from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element, Reaction
+from .reactions import NO_REACTION, CompiledReaction, PairReaction, by_partners, compile_reactions, element_masks, pair_reaction, reaction_rows  # noqa: F401
+from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element
 from ..formats.tomlsource import TomlSource
 
 _NO_LIMIT = 2**62
@@ -152,16 +152,6 @@ class ElementInfo:
 
 
 @dataclass(frozen=True)
-class CompiledReaction:
-    """A reaction with its selectors resolved, for listing."""
-
-    mod: str
-    spec: Reaction
-    a: tuple[str, ...]
-    b: tuple[str, ...]
-
-
-@dataclass(frozen=True)
 class Ruleset:
     """Everything the engine knows about the loaded elements."""
 
@@ -228,7 +218,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     if len(defs) > MAX_ELEMENTS:
         raise ProblemsError([Problem("mods", None, "", f"{len(defs)} elements loaded; at most {MAX_ELEMENTS}")])
     elements = _numbered(defs, [EMPTY_ID] + sorted(i for i in defs if i != EMPTY_ID))
-    elements = _numbered(defs, [EMPTY_ID] + _by_partners(mods, elements))
+    elements = _numbered(defs, [EMPTY_ID] + by_partners(mods, elements))
     ids = {e.id: e.index for e in elements}
     by_mod = {m.name: m for m in mods}
 
@@ -269,12 +259,12 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.carries[info.index] = what
         _fill_breaking(t, info, elements, named, lambda message: problems.append(d.source.problem(d.loc + ("breaks_into",), message)))
     _fill_displacement(t, elements)
-    reactions, t = _compile_reactions(mods, elements, t, resolve, problems, warnings, below)
+    reactions, t = compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
-    colours, looks = _colours(elements, t.heat_recip)
+    colours, looks = colour_table(elements, t.heat_recip)
     return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings))
 
 
@@ -284,22 +274,6 @@ def _numbered(defs: dict[str, "Definition"], order: Sequence[str]) -> tuple[Elem
         ElementInfo(i, eid, defs[eid].spec, defs[eid].source, defs[eid].mod, tuple(defs[eid].replaced), tuple(defs[eid].history))
         for i, eid in enumerate(order)
     )
-
-
-def _by_partners(mods: Sequence[LoadedMod], elements: Sequence[ElementInfo]) -> list[str]:
-    """The ids but the empty cell's, those that the most elements react with first (then by id): the
-    first take the element masks' own bits (:data:`~sandmod.engine.layout.UNIQUE_BITS`)."""
-    ids = {e.id: e.index for e in elements}
-    partners = np.zeros(len(elements), np.int64)
-    for mod in mods:
-        for reaction in mod.spec.reactions:
-            sides = [_select(selector, elements, lambda r: ids.get(resolve_name(r, mod.name, ids, mod.requires)[0]))
-                     for selector in (reaction.a, reaction.b)]
-            if None not in sides:
-                (side_a, _), (side_b, _) = sides
-                partners[list(side_a)] += len(side_b)
-                partners[list(side_b)] += len(side_a)
-    return [e.id for e in sorted(elements[1:], key=lambda e: (-partners[e.index], e.id))]
 
 
 def _fill_element(t: Tables, info: ElementInfo, d: "Definition", problems: list[Problem]) -> None:
@@ -324,11 +298,6 @@ def _fill_element(t: Tables, info: ElementInfo, d: "Definition", problems: list[
 
 #: explosion_resistance when an element does not give one.
 DEFAULT_RESISTANCE = {"empty": 0.0, "gas": 0.0, "particle": 0.0, "powder": 0.5, "liquid": 0.5, "static": 2.0}
-
-
-def temperature_units(celsius: float) -> int:
-    """Degrees Celsius in the kernel's fixed point."""
-    return round(celsius * TEMP_ONE)
 
 
 def _phase_heat(change, cap: int) -> tuple[int, int]:
@@ -495,7 +464,7 @@ def _empty_tables(n: int) -> Tables:
         react_pair=np.zeros((n, n), np.uint16),
         react_group=np.zeros((1, len(SIDES)), np.uint16),
         particle=np.zeros(1, np.uint16),
-        **_reaction_rows([NO_REACTION]),
+        **reaction_rows([NO_REACTION]),
         heat_cap=np.ones(n, np.int64),
         heat_recip=np.ones(n, np.int64),
         conductance=np.zeros(n, np.int64),
@@ -528,196 +497,6 @@ def _empty_tables(n: int) -> Tables:
     )
 
 
-def _select(selector: str, elements: Sequence[ElementInfo], resolve_one) -> tuple[set[int], int] | None:
-    """The element indices a selector matches, and how specific it is (3 name, 2 tag, 1 broad)."""
-    negate = selector.startswith("!")
-    term = selector[1:] if negate else selector
-    non_empty = {e.index for e in elements if e.index != 0}
-    if term == "*":
-        matched, score = set(non_empty), 1
-    elif term.startswith("#"):
-        matched, score = {e.index for e in elements if term[1:] in e.spec.tags}, 2
-    else:
-        index = resolve_one(term)
-        if index is None:
-            return None
-        matched, score = {index}, 3
-    return (non_empty - matched, 1) if negate else (matched, score)
-
-
-def _compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, below) -> tuple[tuple[CompiledReaction, ...], Tables]:
-    """Fill the pair table and make the reaction rows it points to (one per reaction and side: a
-    row serves every pair a reaction matches). Of two reactions on a pair, the more specific wins
-    (names over tags over wildcards), then the one with the higher ``priority``, then the one of
-    the mod loaded later: a warning where neither mod requires the other, an error within one mod."""
-    # pair -> ((specificity, priority), mod, reaction number, outcome, row): the outcome (a becomes,
-    # b becomes, threshold, lowest and highest T sum, heat) with elements, the row with STAYS
-    winner: dict[tuple[int, int], tuple[tuple[int, int], LoadedMod, int, tuple]] = {}
-    reported: set[tuple[str, int, str, int]] = set()  # ties already named, by both reactions
-    compiled: list[CompiledReaction] = []
-
-    def claim(pair, outcome, row, rank, mod, number) -> None:
-        held = winner.get(pair)
-        if held is not None and (held[0] > rank or (held[0] == rank and held[3] == outcome)):
-            return
-        if held is not None and held[0] == rank:  # a tie: the later mod's wins; within a mod, an error
-            tie = (mod.name, number, held[1].name, held[2])
-            if held[1].name == mod.name or held[1].name not in below[mod.name]:
-                if tie not in reported:
-                    reported.add(tie)
-                    _report_tie(elements, pair, mod, number, held, problems if held[1].name == mod.name else warnings)
-                if held[1].name == mod.name:
-                    return
-        winner[pair] = (rank, mod, number, outcome, row)
-
-    for mod in mods:
-        for number, reaction in enumerate(mod.spec.reactions):
-            loc = ("reactions", number)
-            side_a = _select(reaction.a, elements, lambda r: resolve(r, mod, loc + ("a",)))
-            side_b = _select(reaction.b, elements, lambda r: resolve(r, mod, loc + ("b",)))
-            into_a = None if reaction.a_becomes is None else resolve(reaction.a_becomes, mod, loc + ("a_becomes",))
-            into_b = None if reaction.b_becomes is None else resolve(reaction.b_becomes, mod, loc + ("b_becomes",))
-            if side_a is None or side_b is None or (reaction.a_becomes and into_a is None) or (reaction.b_becomes and into_b is None):
-                continue
-            (set_a, score_a), (set_b, score_b) = side_a, side_b
-            threshold = chance_threshold(reaction.chance)
-            low = -(2**31) if reaction.min_temperature is None else 2 * temperature_units(reaction.min_temperature)
-            high = 2**31 - 1 if reaction.max_temperature is None else 2 * temperature_units(reaction.max_temperature)
-            rest = (threshold, low, high, temperature_units(reaction.heat))
-            first, second = (STAYS if into is None else into for into in (into_a, into_b))
-            push = round((reaction.push or 0) * SUBCELL)
-            forward, backward = (first, second, *rest, 0, push), (second, first, *rest, push, 0)
-            rank = (score_a + score_b, reaction.priority)
-            sides = _sides(reaction.where)
-            for i in sorted(set_a):
-                for j in sorted(set_b):
-                    out_i = i if into_a is None else into_a
-                    out_j = j if into_b is None else into_b
-                    for d in sides:
-                        claim((i, j, d), (out_i, out_j, *rest, 0, push), forward, rank, mod, number)
-                        opposite = (d + 2) % len(SIDES)  # the same contact, seen from the other cell
-                        if i != j or opposite not in sides:  # (of one element: whichever looks first is a)
-                            claim((j, i, opposite), (out_j, out_i, *rest, push, 0), backward, rank, mod, number)
-            compiled.append(
-                CompiledReaction(
-                    mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
-                )
-            )
-    rows, groups, sided = {NO_REACTION: 0}, {(0,) * len(SIDES): 0}, {}
-    for (i, j, d), (*_, row) in winner.items():
-        sided.setdefault((i, j), [0] * len(SIDES))[d] = rows.setdefault(row, len(rows))
-    for pair, group in sided.items():
-        t.react_pair[pair] = groups.setdefault(tuple(group), len(groups))
-    t.reactive[:] = element_masks(t.react_pair)
-    problems.extend(_endless_reactions({key[:2]: held for key, held in winner.items()}, elements))
-    return tuple(compiled), t._replace(**_reaction_rows(list(rows)), react_group=np.array(list(groups), np.uint16))
-
-
-def _sides(where: list[str] | None) -> list[int]:
-    """The kernel's numbers of the sides (:data:`SIDES`) a reaction's b cell may lie on, seen from a."""
-    named = {side for w in where or SIDES for side in (("left", "right") if w == "sides" else (w,))}
-    return [d for d, side in enumerate(SIDES) if side in named]
-
-
-#: Row 0 of the reaction tables: what a pair without a reaction reads.
-NO_REACTION = (STAYS, STAYS, 0, -(2**31), 2**31 - 1, 0, 0, 0)
-
-
-class PairReaction(NamedTuple):
-    """What a touching pair does, read from the tables (:func:`pair_reaction`)."""
-
-    chance: int  # roll threshold per frame of contact
-    into_a: int  # what a becomes (itself where it stays)
-    into_b: int
-    tsum_min: int  # lowest T_a + T_b, TEMP_ONE units
-    tsum_max: int
-    heat: int  # temperature added to a cell that changes, TEMP_ONE units
-    push_a: int  # speed a flies off at, SUBCELL units (0: it stays)
-    push_b: int
-
-
-def pair_reaction(t: Tables, a: int, b: int, side: str | None = None) -> PairReaction | None:
-    """The reaction of a cell of element ``a`` touching one of ``b`` on ``side`` (one of :data:`SIDES`;
-    None: the first side it reacts on), or None."""
-    rows = [int(r) for r in t.react_group[t.react_pair[a, b]]]
-    row = rows[SIDES.index(side)] if side is not None else next((r for r in rows if r), 0)
-    if row == 0:
-        return None
-    into_a, into_b = (int(t.react_into_a[row]), int(t.react_into_b[row]))
-    return PairReaction(int(t.react_chance[row]), a if into_a == STAYS else into_a, b if into_b == STAYS else into_b,
-                        int(t.react_tsum_min[row]), int(t.react_tsum_max[row]), int(t.react_heat[row]),
-                        int(t.react_push_a[row]), int(t.react_push_b[row]))
-
-
-def _reaction_rows(rows: Sequence[tuple]) -> dict[str, np.ndarray]:
-    """The react_ tables (but react_pair and react_group) of these rows: (a becomes, b becomes, threshold,
-    lowest and highest T sum, heat, a's push, b's push) each, STAYS for a cell that stays."""
-    columns = list(zip(*rows))
-    names_types = (("react_into_a", np.uint16), ("react_into_b", np.uint16), ("react_chance", np.uint32),
-                   ("react_tsum_min", np.int32), ("react_tsum_max", np.int32), ("react_heat", np.int32),
-                   ("react_push_a", np.int32), ("react_push_b", np.int32))
-    return {name: np.array(column, kind) for (name, kind), column in zip(names_types, columns)}
-
-
-def _report_tie(elements, pair, mod, number, held, into: list[Problem]) -> None:
-    """Name two reactions that match ``pair`` as specifically, at one priority: an error within a mod,
-    a warning between two (the later one's applies)."""
-    earlier = held[1].source.problem(("reactions", held[2]), "")
-    what = f"{elements[pair[0]].id} + {elements[pair[1]].id} also reacts differently at {earlier.file}:{earlier.line} ({earlier.path})"
-    if held[1].name == mod.name:
-        into.append(mod.source.problem(("reactions", number), f"{what}; make one selector more specific, or give one a higher priority"))
-    else:
-        into.append(mod.source.problem(("reactions", number), f"{what}, as specific and of the same priority: this one applies, "
-                                       f"{mod.name} being loaded after {held[1].name} (a higher priority on one would say which)"))
-
-
-def element_masks(pairs: np.ndarray) -> np.ndarray:
-    """Per element ``a``, the bits (:func:`~sandmod.engine.layout.mask_bit`) of the elements ``b`` with
-    ``pairs[a, b] > 0`` (those it reacts with, or may swap with): a cheap first test of a cell's
-    neighbours, never missing a partner."""
-    bits = np.zeros(pairs.shape[0], np.uint64)
-    for b in np.flatnonzero((pairs > 0).any(axis=0)):
-        bits[pairs[:, b] > 0] |= np.uint64(1) << np.uint64(mask_bit(int(b)))
-    return bits.view(np.int64)
-
-
-def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Problem]:
-    """Touching pairs that react into a pair that reacts back, and so on round, at any temperature,
-    with cells that can never part: they change forever. A chain is left alone where a cell in it can
-    move away (any archetype but static) or changes by itself (a lifetime), or where a reaction in
-    it happens only in a range of temperatures narrower than every temperature there is."""
-    every = (2 * temperature_units(MIN_TEMPERATURE), 2 * temperature_units(MAX_TEMPERATURE))
-
-    def stuck(e: int) -> bool:
-        return elements[e].spec.archetype == "static" and elements[e].spec.lifetime is None
-
-    always = {
-        pair: (first, second)
-        for pair, (_, _, _, (first, second, _, low, high, *_), _) in winner.items()
-        if low <= every[0] and high >= every[1] and (first, second) != pair and all(stuck(e) for e in (*pair, first, second))
-    }
-    problems: list[Problem] = []
-    reported: set = set()
-    for start in sorted(always):
-        path, pair = [start], always[start]
-        while pair in always and pair not in path and (pair[1], pair[0]) not in path:
-            path.append(pair)
-            pair = always[pair]
-        if (pair in path or (pair[1], pair[0]) in path) and not reported & set(path):
-            reported.update(path)
-            reported.update((b, a) for a, b in path)  # the same contacts, seen from the other cell
-            _, mod, number, *_ = winner[start]
-            steps = " -> ".join(f"{elements[a].name} + {elements[b].name}" for a, b in [*path, pair])
-            problems.append(
-                mod.source.problem(
-                    ("reactions", number),
-                    f"these reactions never settle: {steps}; touching cells that cannot move would change forever "
-                    "(give one of them a temperature range, a lifetime to an element in it, or end the chain)",
-                )
-            )
-    return problems
-
-
 def _endless_phase_changes(t: Tables, elements: Sequence[ElementInfo], defs: dict[str, "Definition"]) -> list[Problem]:
     """An element that turns into another when heated, which turns back when cooled, above the first's limit."""
     problems: list[Problem] = []
@@ -738,94 +517,3 @@ def _endless_phase_changes(t: Tables, elements: Sequence[ElementInfo], defs: dic
             )
     return problems
 
-
-def _hex_rgb(color: str) -> tuple[int, int, int]:
-    return int(color[1:3], 16), int(color[3:5], 16), int(color[5:7], 16)
-
-
-SCORCH_DARKEN = 0.45  # a scorched cell keeps this much of its brightness
-SHADES = 8  # colours each element's cells pick from
-SCORCHED_SHADES = 4  # of a scorched cell
-
-
-@dataclass(frozen=True)
-class Looks:
-    """Colour indices (rows of :attr:`Ruleset.colours`) per element: its shades, its scorched shades,
-    and its glow levels; the same for an element however many others are loaded."""
-
-    normal: np.ndarray  # uint16[n, SHADES]
-    scorched: np.ndarray  # uint16[n, SCORCHED_SHADES]
-    glow: np.ndarray  # uint16[n, len(GLOW_COLOURS)]
-    glow_from: np.ndarray  # int64[n]: temperature (TEMP_ONE units) where it starts to glow
-    glow_energy: np.ndarray  # int64[n, len(GLOW_COLOURS)]: heat energy from which it glows at each level
-
-    @property
-    def shades(self) -> int:
-        """How many colours each element's cells pick from."""
-        return self.normal.shape[1]
-
-
-def _glow_energies(glow_from: list[int], glow_step: int, heat_recip: list[int]) -> np.ndarray:
-    """For each element, the heat energies from which a cell of it glows at each level (int64,
-    (n, levels)), from the heat capacities' ``heat_recip``: the least energy whose temperature,
-    read as the kernel reads it, is above its glow point, then at least a glow step, two, ...
-    past it. So the pixels compare energies, and multiply nothing, for all but flying particles."""
-    table = np.empty((len(glow_from), len(GLOW_COLOURS)), np.int64)
-    for e, (start, recip) in enumerate(zip(glow_from, heat_recip)):
-        for level in range(len(GLOW_COLOURS)):
-            units = start + 1 if level == 0 else start + level * glow_step  # temperature (energy * recip) >> 32 must reach
-            table[e, level] = -(-(units << 32) // recip)  # the least energy whose product reaches units << 32
-    table[0] = np.iinfo(np.int64).max  # the air never glows
-    return table
-
-
-def _colours(elements: Sequence[ElementInfo], heat_recip: np.ndarray) -> tuple[np.ndarray, Looks]:
-    """Every colour a cell can show (uint8 (colours, 3)), and each element's indices into it: every
-    element's shades first, in element order, then their darker scorched shades, then their glow
-    levels (so that a format of few colours that takes them in order takes what most cells show
-    first). The empty cell (air) gets shades only: it neither scorches nor glows (its scorched and
-    glow indices are its first shade).
-    """
-    n = len(elements)
-    # An element hot by nature (lava, fire) already looks hot: it glows only when hotter still.
-    glow_from = [temperature_units(max(GLOW_FROM, e.spec.temperature)) for e in elements]
-    looks = Looks(
-        np.zeros((n, SHADES), np.uint16),
-        np.zeros((n, SCORCHED_SHADES), np.uint16),
-        np.zeros((n, len(GLOW_COLOURS)), np.uint16),
-        np.array(glow_from, np.int64),
-        _glow_energies(glow_from, temperature_units(GLOW_STEP), heat_recip.tolist()),
-    )
-    rows: list[np.ndarray] = []
-
-    def add(colours: list[np.ndarray]) -> np.ndarray:
-        rows.extend(colours)
-        return np.arange(len(rows) - len(colours), len(rows))
-
-    made = [_element_colours(info.spec) for info in elements]
-    for info, shades in zip(elements, made):
-        looks.normal[info.index] = add(shades[:SHADES])
-    looks.scorched[0], looks.glow[0] = looks.normal[0, 0], looks.normal[0, 0]
-    for info, shades in zip(elements[1:], made[1:]):
-        looks.scorched[info.index] = add(shades[SHADES : SHADES + SCORCHED_SHADES])
-    for info, shades in zip(elements[1:], made[1:]):
-        looks.glow[info.index] = add(shades[SHADES + SCORCHED_SHADES :])
-    return np.clip(np.round(rows), 0, 255).astype(np.uint8), looks
-
-
-def _element_colours(spec: Element) -> list[np.ndarray]:
-    """An element's colours (RGB, unrounded): its SHADES shades, its SCORCHED_SHADES scorched ones
-    and a glow colour per level."""
-    colors = [np.array(_hex_rgb(c), float) for c in spec.color]
-
-    def shaded(j: int, count: int) -> np.ndarray:
-        levels = -(-count // len(colors))
-        v = ((j // len(colors)) + 0.5) / levels  # spread across (0, 1)
-        return colors[j % len(colors)] * (1.0 + spec.shade * (2.0 * v - 1.0))
-
-    base = sum(colors) / len(colors)
-    return (
-        [shaded(j, SHADES) for j in range(SHADES)]
-        + [shaded(j, SCORCHED_SHADES) * SCORCH_DARKEN for j in range(SCORCHED_SHADES)]
-        + [base * (1 - mix) + np.array(hot) * mix for hot, mix in zip(GLOW_COLOURS, GLOW_MIX)]
-    )
