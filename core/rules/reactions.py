@@ -73,9 +73,10 @@ def compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, be
     row serves every pair a reaction matches). Of two reactions on a pair, the more specific wins
     (names over tags over wildcards), then the one with the higher ``priority``, then the one of
     the mod loaded later: a warning where neither mod requires the other, an error within one mod."""
-    # pair -> ((specificity, priority), mod, reaction number, outcome, row): the outcome (a becomes,
-    # b becomes, threshold, lowest and highest T sum, heat) with elements, the row with STAYS
-    winner: dict[tuple[int, int], tuple[tuple[int, int], LoadedMod, int, tuple]] = {}
+    # (a, b, side b lies on) -> ((specificity, priority), mod, reaction number, outcome, row): the outcome
+    # (a becomes, b becomes, threshold, lowest and highest T sum, heat, a's push, b's push) with
+    # elements, the row the same with STAYS for a cell that stays
+    winner: dict[tuple[int, int, int], tuple[tuple[int, int], LoadedMod, int, tuple, tuple]] = {}
     reported: set[tuple[str, int, str, int]] = set()  # ties already named, by both reactions
     compiled: list[CompiledReaction] = []
 
