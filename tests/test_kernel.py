@@ -178,3 +178,78 @@ def test_a_powder_of_negative_gravity_rises_as_a_body_and_piles_on_the_ceiling(r
         assert alternating_rows(world.cells, e) <= 3  # no comb while it rises
     rows = (world.cells == e).sum(axis=1)
     assert rows[1:6].sum() == 36 and rows[1] > rows[2] > 0  # all against the ceiling, widest there: a heap upside down
+
+
+ORDER = """
+[mod]
+name = "o"
+requires = ["fire"]
+[elements.wire]
+archetype = "static"
+color = "#b87333"
+[elements.spark]
+archetype = "static"
+color = "#ffee88"
+lifetime = { frames = LIFE, becomes = "wire" }
+[elements.glow]
+archetype = "static"
+color = "#ffaa00"
+lifetime = { frames = 10, becomes = "empty" }
+[elements.fuel]
+archetype = "static"
+color = "#553311"
+[elements.thermite]
+archetype = "powder"
+color = "#8a5a3a"
+density = 2000
+flammable = { ignites_at = 600, burn_time = 60 }
+[[reactions]]
+a = "spark"
+b = "wire"
+b_becomes = "spark"
+chance = 1
+[[reactions]]
+a = "glow"
+b = "fuel"
+a_becomes = "glow"
+b_becomes = "empty"
+chance = 1
+"""
+
+
+def _order_rules(registry, tmp_path, life):
+    from conftest import write_mods
+    from sandmod.world.loading import load_ruleset
+
+    return load_ruleset(["o"], [write_mods(tmp_path / f"o{life}", {"o.toml": ORDER.replace("LIFE", str(life))})], registry=registry)
+
+
+def test_a_lifetime_runs_out_before_the_cell_reacts(registry, tmp_path):
+    """Documented order (the reactions how-to): lifetime, then reactions. A spark that lives one frame
+    is gone before it touches the wire; one that lives two passes on, once a frame, down the wire."""
+    legend = {".": "empty", "w": "wire", "s": "spark"}
+    world = run(make_world(_order_rules(registry, tmp_path, 1), ["swwwww"], legend), 1)
+    assert as_rows(world, legend) == ["wwwwww"]  # it died into wire at once: nothing passed on
+    world = make_world(_order_rules(registry, tmp_path, 2), ["swwwww"], legend)
+    reached = [as_rows(run(world, 1), legend)[0].rfind("s") for _ in range(5)]
+    assert reached == [1, 2, 3, 4, 5]  # the spark's front, one cell a frame
+
+
+def test_a_reaction_that_leaves_a_cell_as_it_was_keeps_its_lifetime(registry, tmp_path):
+    """Documented choice: ``a_becomes`` its own element changes nothing, so the glow's ten frames run on
+    while it eats fuel; it is not born again."""
+    legend = {".": "empty", "g": "glow", "f": "fuel"}
+    world = run(make_world(_order_rules(registry, tmp_path, 2), ["gf", "ff"], legend), 10)
+    assert "g" not in "".join(as_rows(world, legend))
+
+
+def test_a_cell_painted_hotter_than_it_ignites_lights_on_its_first_frame(registry, tmp_path):
+    """Heat flows first, then fire: a cell painted past ``ignites_at`` still is on its first frame
+    (conduction moves under a quarter of a gap a frame), so it lights at once, alone in cold air too."""
+    from sandmod.engine.layout import BURNING
+
+    ruleset = _order_rules(registry, tmp_path, 2)
+    world = make_world(ruleset, ["....", ".t..", "...."], {".": "empty", "t": "thermite"})
+    world.set_temperature(world.cells == ruleset.index("thermite"), 700.0)
+    world.step()
+    assert world.state.flags[world.cells == ruleset.index("thermite")] & BURNING  # (where it fell to)
