@@ -192,6 +192,12 @@ class _KernelRun:
         if self.end is None:
             self.end = saved(self.world)
 
+    def warm(self) -> None:
+        """Compile its kernel, or load it from the cache, before it is timed: a step, forgotten."""
+        self.rewind()
+        self.run(range(1))
+        self.end = None
+
     def go_on_from(self, state: list[np.ndarray]) -> None:
         self.start, self.frame, self.end = state, self.world.frame, None
 
@@ -220,10 +226,8 @@ def compare(
     counts = list(threads) if isinstance(threads, (list, tuple)) else [threads] * len(kernels)
     world = bench.make()
     runs = [_KernelRun(world, kernel, count) for kernel, count in zip(kernels, counts)]
-    for run in runs:  # compile, or load from the cache, before timing
-        run.rewind()
-        run.run(range(1))
-        run.end = None
+    for run in runs:
+        run.warm()
     restore(world, runs[0].start, runs[0].frame)
     cells = len(world.state)  # the chunks' marks may differ, as one kernel may wake finer than another
 
@@ -260,9 +264,7 @@ def compare_worlds(benches: Sequence[Bench], steps: int, threads: int | None, *,
 
     runs = [_KernelRun(bench.make(), kernel, threads) for bench in benches]
     for run in runs:
-        run.rewind()
-        run.run(range(1))
-        run.end = None
+        run.warm()
 
     def after(frames: range) -> None:
         for run in runs:
