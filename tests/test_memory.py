@@ -138,7 +138,7 @@ LEGEND = {".": "empty", "#": "stone", "S": "sand", "W": "water", "C": "clone", "
 
 @pytest.fixture(scope="module")
 def ruleset(tmp_path_factory):
-    return load_ruleset(None, [write_mods(tmp_path_factory.mktemp("mods"), {"mem.toml": MEMORY})])
+    return load_ruleset(["base", "sand", "water", "mem"], [write_mods(tmp_path_factory.mktemp("mods"), {"mem.toml": MEMORY})])  # not every bundled mod: metals has its own copper and iron
 
 
 def test_a_clone_learns_what_touches_it_and_pours_copies_of_it(ruleset):
