@@ -120,8 +120,8 @@ def test_a_column_of_sand_in_water_slumps_into_a_heap(ruleset):
 
 def test_a_heavy_liquid_sinks_under_sand(with_fluids):
     rows = ["#" + "." * 30 + "#"] * 4 + ["#" + "." * 8 + "M" * 14 + "." * 8 + "#"] * 6 + ["#" + "S" * 30 + "#"] * 10 + ["#" * 32]
-    world = make_world(with_fluids, rows, {".": "empty", "#": "stone", "S": "sand", "M": "mercury"})
-    mercury, sand = with_fluids.index("mercury"), with_fluids.index("sand")
+    world = make_world(with_fluids, rows, {".": "empty", "#": "stone", "S": "sand", "M": "fluids:mercury"})
+    mercury, sand = with_fluids.index("fluids:mercury"), with_fluids.index("sand")  # this mod's (metals has one too)
     run(world, 600)
     cells = world.cells
     under_sand = sum(int((cells[: y, x] == sand).any()) for y, x in zip(*np.nonzero(cells == mercury)))
@@ -132,8 +132,8 @@ def test_a_heavy_liquid_sinks_under_sand(with_fluids):
 
 def test_water_lifts_a_lighter_powder(with_fluids):
     rows = ["#" + "W" * 20 + "#"] * 6 + ["#" + "D" * 20 + "#"] * 4 + ["#" * 22]
-    world = make_world(with_fluids, rows, {"#": "stone", "W": "water", "D": "sawdust"})
-    dust, water = with_fluids.index("sawdust"), with_fluids.index("water")
+    world = make_world(with_fluids, rows, {"#": "stone", "W": "water", "D": "fluids:sawdust"})
+    dust, water = with_fluids.index("fluids:sawdust"), with_fluids.index("water")  # this mod's (earth has one too)
     run(world, 800)
     assert np.nonzero(world.cells == dust)[0].mean() < np.nonzero(world.cells == water)[0].mean()
 
