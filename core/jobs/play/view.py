@@ -215,7 +215,7 @@ class View:
         room = self.size[0] - 2 * ARROW - 8
         shown = [s.name for s in tabs].index(menu.current().name)
         first = 0
-        while first < shown and sum(widths[first : shown + 1]) > room:
+        while first < shown and 2 + sum(widths[first : shown + 1]) > room:  # the row starts 2 pixels in
             first += 1
         items, left = [], 2
         for section, width in zip(tabs[first:], widths[first:]):
