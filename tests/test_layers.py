@@ -18,8 +18,9 @@ BELOW = {
     "hooks": {"formats", "errors"},
     "registry": {"hooks", "formats", "errors"},
     "rules": {"registry", "hooks", "formats", "engine", "errors"},
-    "world": {"rules", "registry", "hooks", "formats", "engine", "errors"},
-    "jobs": {"world", "rules", "registry", "hooks", "formats", "engine", "errors"},
+    "passes": {"rules", "registry", "hooks", "formats", "engine", "errors"},
+    "world": {"passes", "rules", "registry", "hooks", "formats", "engine", "errors"},
+    "jobs": {"world", "passes", "rules", "registry", "hooks", "formats", "engine", "errors"},
     "plugins": {"api"},  # the built-in plugins import what a third party's would
 }
 FOLDERS = {"core": "", "plugins": "plugins"}

@@ -14,7 +14,7 @@ megabyte. Colours are :mod:`.colours`'s.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple, Sequence
+from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 
@@ -48,6 +48,9 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     TEMP_ONE,
     temperature_units,
 )
+from ..formats.behaviour import Behaviour
+from ..registry import Registered
+from .behaviours import Behaviours, compile_behaviours
 from .colours import SCORCH_DARKEN, SCORCHED_SHADES, SHADES, Looks, colour_table  # noqa: F401  (names the other modules take from here too)
 from .definitions import Definition, Override, collect_definitions, required_below, resolve_name
 from .glow import GLOW_COLOURS, GLOW_FROM, GLOW_MIX, GLOW_STEP  # noqa: F401  (names the other modules take from here too)
@@ -170,6 +173,8 @@ class Ruleset:
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
     #: What loads but may not be what the mods' authors meant: one field patched by two mods that do not require each other.
     warnings: tuple[Problem, ...] = ()
+    #: The plugin behaviours its elements name; None when none does (its worlds never run them).
+    behaviours: Behaviours | None = None
 
     @property
     def particle(self) -> int:
@@ -202,8 +207,9 @@ class Ruleset:
         return self._ids[found]
 
 
-def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
-    """Compile mods (in load order) into a :class:`Ruleset`; ProblemsError lists every mistake."""
+def compile_mods(mods: Sequence[LoadedMod], behaviours: Mapping[str, Registered[Behaviour]] | None = None) -> Ruleset:
+    """Compile mods (in load order) into a :class:`Ruleset`, with the plugins' ``behaviours`` (by full
+    name) for elements to name; ProblemsError lists every mistake."""
     problems: list[Problem] = []
     warnings: list[Problem] = []
     defs = collect_definitions(mods, problems, warnings)
@@ -259,13 +265,20 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
                 t.carries[info.index] = what
         _fill_breaking(t, info, elements, named, lambda message: problems.append(d.source.problem(d.loc + ("breaks_into",), message)))
     _fill_displacement(t, elements)
+    at = lambda i: defs[elements[i].id]  # noqa: E731  (the definition in force of element i)
+    behaving = compile_behaviours(
+        elements,
+        behaviours or {},
+        lambda i: lambda field, message: problems.append(at(i).source.problem(at(i).loc + field, message)),
+        lambda i: lambda ref, *field: resolve(ref, by_mod[at(i).mod], at(i).loc + field),
+    )
     reactions, t = compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
     colours, looks = colour_table(elements, t.heat_recip)
-    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings))
+    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings), behaving)
 
 
 def _numbered(defs: dict[str, "Definition"], order: Sequence[str]) -> tuple[ElementInfo, ...]:

@@ -283,6 +283,7 @@ class World:
         self.paintings: list[Painting] = []
         self.heaters: list[Heater] = []
         self.launchers: list[Launcher] = []
+        self._walker = None  # the plugin behaviours' pass (sandmod.passes.behaviours.Walker), made on the first step that needs it
         self.paint(np.broadcast_to(True, shape), 0)  # empty, with its own shades
 
     @property
@@ -487,6 +488,7 @@ class World:
             if heater.active(self.frame):
                 self.set_temperature(heater.area(self.cells), heater.celsius)
         self._changed |= self.awake  # the kernel changes only chunks awake before it runs, or woken by it
+        before = self.awake.copy() if self.ruleset.behaviours is not None else None
         hands = self._thread_count()
         started = perf_counter()
         stepper = kernel.step_at_once if hands > 1 else kernel.step
@@ -514,8 +516,18 @@ class World:
         due = [row for frame, row in self.scheduled if frame == self.frame]
         if due:  # the world file's, in its order
             self._explode(np.array(due), 1)
+        if before is not None:
+            self._behave(before)
         self._changed |= self.awake
         self.frame += 1
+
+    def _behave(self, before: np.ndarray) -> None:
+        """Run the plugin behaviours the ruleset's elements name (``before``: the wake marks before the step)."""
+        from ..passes.behaviours import SALT_BEHAVIOUR, Walker
+
+        if self._walker is None or self._walker.table is not self.ruleset.behaviours:
+            self._walker = Walker(self.ruleset.behaviours, (self.height, self.width), self.awake.shape)
+        self._walker.run(self, before, frame_key(self.seed, self.frame, SALT_BEHAVIOUR))
 
     def _thread_count(self) -> int:
         """This frame's thread count: :attr:`threads`, or as many as pay (see :mod:`sandmod.engine.threads`);
@@ -618,6 +630,7 @@ class World:
         versions than it was made with); ProblemsError if it does not fit or is not a snapshot."""
         from .snapshots import load_snapshot
 
+        self._walker = None  # which chunks hold behaviour cells is not in a snapshot: all are walked once
         return load_snapshot(self, Path(path))
 
     def _repr_png_(self) -> bytes:

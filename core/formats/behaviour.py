@@ -1,0 +1,165 @@
+"""The behaviour interface: what a plugin's per-cell behaviour is, and the view it gets of its cell.
+
+A behaviour is a plain Python function of one argument, a :class:`View` of one
+cell, made into a :class:`Behaviour` by :func:`behaviour`, registered with the
+``register_behaviours`` hook and named by elements (``behaviour = "garden:grow"``).
+sandmod compiles it with numba, alone (never the kernel), and calls it once a
+frame for each cell of an element that names it, after the kernel's step.
+
+Inside it, the cell and its neighbours are read and changed only through the
+helpers below (:func:`here`, :func:`look`, :func:`put`, :func:`swap`,
+:func:`temperature`, :func:`random`, :func:`chance`, :func:`arg`), within
+:data:`REACH` cells. Here they are plain Python stand-ins, so that importing
+them costs nothing; :mod:`sandmod.passes.helpers` gives numba their compiled
+forms. Nothing here imports numba.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import inspect
+import re
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, NamedTuple
+
+#: How far a behaviour reaches, in cells either way: farther offsets read as outside the world.
+REACH = 2
+#: A behaviour's own name (the part after the plugin's, ``garden:grow``) and an argument's name.
+NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+#: A behaviour's full name, as elements write it: ``PLUGIN:name``.
+FULL_NAME = r"^[a-z][a-z0-9_.-]*:[a-z][a-z0-9_]*$"
+#: Most arguments one behaviour takes.
+MAX_ARGS = 16
+
+
+class View(NamedTuple):
+    """One cell as a behaviour sees it. Its fields are sandmod's to change: use the helpers."""
+
+    cells: Any
+    shade: Any
+    timer: Any
+    flags: Any
+    vx: Any
+    vy: Any
+    carry: Any
+    heat: Any
+    life_frames: Any  # the tables a new cell is made from
+    life_jitter: Any
+    heat_cap: Any
+    heat_recip: Any
+    temp_start: Any
+    codes: Any  # per element: its behaviour's number (0: none)
+    args: Any  # per element: its behaviour's arguments, float64
+    stamp: Any  # per cell: frame + 1 where a behaviour changed it this frame
+    awake: Any  # per chunk: the world's wake marks, its even marks, and whether it holds behaviour cells
+    even: Any
+    held: Any
+    draws: Any  # the number of random draws this cell has taken, one uint32
+    key: Any  # the frame's key for behaviours' randomness
+    frame: Any
+    x: Any
+    y: Any
+    element: Any
+
+
+@dataclass(frozen=True)
+class Behaviour:
+    """A per-cell behaviour: the function, and the names of the arguments elements give it."""
+
+    function: Callable[[View], None]
+    #: Argument names, in the order :func:`arg` numbers them.
+    args: tuple[str, ...] = ()
+    #: Values of the arguments an element may leave out (a number, or an element's name).
+    defaults: Mapping[str, float | str] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        """The function's name, for messages."""
+        return getattr(self.function, "__qualname__", repr(self.function))
+
+    def source_hash(self) -> str:
+        """A hash of the code it is compiled from: its module's whole file where there is one."""
+        h = hashlib.sha256(f"{self.function.__module__}.{self.name} {self.args}".encode())
+        try:
+            h.update(open(inspect.getsourcefile(self.function) or "", "rb").read())
+            h.update(inspect.getsource(self.function).encode())
+        except (OSError, TypeError):
+            h.update(self.function.__code__.co_code + repr(self.function.__code__.co_consts).encode())
+        return h.hexdigest()
+
+
+def behaviour(args: tuple[str, ...] | Mapping[str, float | str | None] = ()) -> Callable[[Callable], Behaviour]:
+    """Make a function of one :class:`View` into a behaviour taking ``args``: names, or a mapping
+    of names to defaults (None: required). ``arg(v, k)`` reads the k-th, as a number (an element
+    given by name reads as its id)."""
+    names = tuple(args)
+    defaults = {k: v for k, v in args.items() if v is not None} if isinstance(args, Mapping) else {}
+    bad = [n for n in names if not (isinstance(n, str) and NAME.match(n))]
+    if bad or len(names) > MAX_ARGS or len(set(names)) != len(names):
+        raise ValueError(f"behaviour args must be up to {MAX_ARGS} distinct lower-case names, got {names!r}")
+
+    def make(function: Callable) -> Behaviour:
+        return Behaviour(function, names, defaults)
+
+    return make
+
+
+# The helpers. Plain Python here; compiled into each behaviour (see sandmod.passes.helpers).
+
+
+def here(v: View) -> int:
+    """The element id of the cell itself."""
+    return int(v.element)
+
+
+def look(v: View, dx: int, dy: int) -> int:
+    """The element id of the cell ``dx`` to the right and ``dy`` down (up to :data:`REACH`
+    cells either way); -1 outside the world or out of reach."""
+    raise _python_only()
+
+
+def put(v: View, dx: int, dy: int, element: int) -> bool:
+    """Make the cell at (dx, dy) a new cell of ``element``, as a reaction would: its own shade and
+    lifetime, at rest, at the temperature the cell had, done for the frame (no behaviour runs on
+    it until the next), its chunk woken. False (and nothing changed) outside the world or reach."""
+    raise _python_only()
+
+
+def swap(v: View, dx: int, dy: int) -> bool:
+    """Trade places with the cell at (dx, dy), everything the cells hold going with them (a walk);
+    both are done for the frame. The view still names the old place. False outside or out of reach."""
+    raise _python_only()
+
+
+def temperature(v: View, dx: int, dy: int) -> float:
+    """The temperature of the cell at (dx, dy) in degrees Celsius; NaN outside or out of reach."""
+    raise _python_only()
+
+
+def random(v: View) -> float:
+    """A number in [0, 1), a hash of the seed, frame, cell and how many the cell has drawn:
+    the same on every run and any number of threads; each call draws the next."""
+    raise _python_only()
+
+
+def chance(v: View, p: float) -> bool:
+    """True with probability ``p``: ``random(v) < p``."""
+    raise _python_only()
+
+
+def arg(v: View, k: int) -> float:
+    """The element's k-th argument (in the order the behaviour declares them), as a float."""
+    raise _python_only()
+
+
+def frame(v: View) -> int:
+    """The frame number (the one the kernel has just stepped)."""
+    return int(v.frame)
+
+
+#: The helpers, by name (the compiled forms are registered for each).
+HELPERS = (here, look, put, swap, temperature, random, chance, arg, frame)
+
+
+def _python_only() -> RuntimeError:
+    return RuntimeError("sandmod's behaviour helpers run only inside a compiled behaviour")
