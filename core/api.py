@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from .errors import Problem, ProblemsError
 from .hooks import Metric, ModLoader, hookimpl
-from .formats.behaviour import REACH, Behaviour, View, arg, behaviour, chance, frame, here, look, put, random, swap, temperature
+from .formats.behaviour import REACH, Behaviour, View, arg, behaviour, chance, frame, helper, here, look, put, random, swap, temperature
 from .formats.modspec import Explosion
 from .formats.recording import PALETTE_SIZE, Palette, Recorder, RecorderSpec, SavedAtClose, VideoSettings, fit_palette, write_png
 from .formats.tomlsource import Loc, TomlSource
@@ -40,6 +40,7 @@ __all__ = [
     "behaviour",
     "chance",
     "frame",
+    "helper",
     "here",
     "look",
     "put",

@@ -78,13 +78,16 @@ class Behaviour:
         return getattr(self.function, "__qualname__", repr(self.function))
 
     def source_hash(self) -> str:
-        """A hash of the code it is compiled from: its module's whole file where there is one."""
+        """A hash of the code it is compiled from: its module's whole file, and those of the
+        functions its package marks with :func:`helper`."""
         h = hashlib.sha256(f"{self.function.__module__}.{self.name} {self.args}".encode())
-        try:
-            h.update(open(inspect.getsourcefile(self.function) or "", "rb").read())
-            h.update(inspect.getsource(self.function).encode())
-        except (OSError, TypeError):
-            h.update(self.function.__code__.co_code + repr(self.function.__code__.co_consts).encode())
+        package = self.function.__module__.split(".")[0]
+        for function in [self.function] + [f for f in MARKED if f.__module__.split(".")[0] == package]:
+            try:
+                h.update(open(inspect.getsourcefile(function) or "", "rb").read())
+                h.update(inspect.getsource(function).encode())
+            except (OSError, TypeError):
+                h.update(function.__code__.co_code + repr(function.__code__.co_consts).encode())
         return h.hexdigest()
 
 
@@ -102,6 +105,17 @@ def behaviour(args: tuple[str, ...] | Mapping[str, float | str | None] = ()) -> 
         return Behaviour(function, names, defaults)
 
     return make
+
+
+#: Functions of plugins marked with :func:`helper`, in the order marked.
+MARKED: list[Callable] = []
+
+
+def helper(function: Callable) -> Callable:
+    """Mark a plugin's own function, which its behaviours call, to be compiled with them
+    (numba compiles only what it is told to; this tells it without importing numba now)."""
+    MARKED.append(function)
+    return function
 
 
 # The helpers. Plain Python here; compiled into each behaviour (see sandmod.passes.helpers).

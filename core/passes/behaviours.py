@@ -62,6 +62,9 @@ def compiled_pass(table: Behaviours) -> Callable:
     """The pass's ``run`` (compiled on its first call, or loaded from the cache)."""
     key = pass_key(table)
     if key not in _LOADED:
+        from . import helpers
+
+        helpers.register_marked()
         path = kernel_cache_dir() / "behaviours" / f"pass_{key}.py"
         if not path.exists():  # written once: numba's cache goes by the file's time
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -146,3 +146,17 @@ def _chance(v, p):
 @overload(api.arg)
 def _arg(v, k):
     return lambda v, k: v.args[v.element, k]
+
+
+_registered: set = set()
+
+
+def register_marked() -> None:
+    """Give numba the plugins' functions marked with ``sandmod.api.helper`` since the last call."""
+    for function in api.MARKED:
+        if function not in _registered:
+            overload(function, strict=False)(lambda *args, _f=function: _f)
+            _registered.add(function)
+
+
+register_marked()
