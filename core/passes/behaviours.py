@@ -132,5 +132,6 @@ def summary(exc: Exception) -> str:
     text = _ANSI.sub("", str(exc))
     lines = [line.strip() for line in text.splitlines()]
     what = next((line for line in lines if line and not line.startswith(("Failed in", "During:", "File ", "- ", "Resolution failure", ">>>"))), text.strip())
+    what = re.sub(r"View\(.*\)", "View", what)  # the view's type is a screenful
     where = [(f, n) for f, n in _WHERE.findall(text) if "numba" not in f and "sandmod_behaviours" not in f and "/passes/" not in f]
     return f"{what} ({where[0][0]}:{where[0][1]})" if where else what
