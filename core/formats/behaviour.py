@@ -66,6 +66,7 @@ class View(NamedTuple):
 class Behaviour:
     """A per-cell behaviour: the function, and the names of the arguments elements give it."""
 
+    #: The function of one :class:`View`, compiled by numba.
     function: Callable[[View], None]
     #: Argument names, in the order :func:`arg` numbers them.
     args: tuple[str, ...] = ()

@@ -328,7 +328,7 @@ class _ElementBase(_Strict):
         pattern=BEHAVIOUR_NAME,
         description="A compiled per-cell behaviour a plugin gives (its 'register_behaviours' hook), as 'PLUGIN:name': "
         "run once a frame for each cell of the element, after the kernel's step, for what data cannot say "
-        "(a vine that branches, an ant that digs). 'sandmod list --behaviours' shows those installed.",
+        "(a vine that branches, an ant that digs). An unknown name is a mistake that names those installed.",
         examples=["garden:grow"],
     )
     behaviour_args: dict[Annotated[str, Field(pattern=rf"^{NAME}$")], float | bool | str] = Field(
