@@ -88,13 +88,14 @@ class Walker:
         self.table = table
         self.stamp = np.zeros(shape, np.uint32)  # frame + 1 where a behaviour changed the cell
         self.held = np.ones(chunks, np.uint8)  # chunks that may hold behaviour cells: all, at first
+        self._run: Callable | None = None  # the compiled pass, once found
 
     def run(self, world, before: np.ndarray, key: int) -> None:
         """Run the behaviours of ``world``'s cells (``before``: its wake marks before the step)."""
         visit = ((before != 0) | (world.awake != 0) | (self.held != 0)).astype(np.uint8)
         if not visit.any():
             return
-        run = compiled_pass(self.table)
+        run = self._run = self._run or compiled_pass(self.table)
         s, t = world.state, world.tables
         arrays = (*s, t.life_frames, t.life_jitter, t.heat_cap, t.heat_recip, t.temp_start, self.table.codes, self.table.args, self.stamp, world.awake, world._even, self.held)
         if run.signatures:
