@@ -35,31 +35,31 @@ MAX_ARGS = 16
 class View(NamedTuple):
     """One cell as a behaviour sees it. Its fields are sandmod's to change: use the helpers."""
 
-    cells: Any
-    shade: Any
-    timer: Any
-    flags: Any
-    vx: Any
-    vy: Any
-    carry: Any
-    heat: Any
-    life_frames: Any  # the tables a new cell is made from
-    life_jitter: Any
-    heat_cap: Any
-    heat_recip: Any
-    temp_start: Any
+    cells: Any  # the world's arrays (sandmod.api.State's), (height, width)
+    shade: Any  # each cell's shade
+    timer: Any  # each cell's lifetime or burning time left
+    flags: Any  # each cell's kernel flags
+    vx: Any  # each cell's velocity, right
+    vy: Any  # each cell's velocity, down
+    carry: Any  # what each flying particle carries
+    heat: Any  # each cell's heat energy
+    life_frames: Any  # per element: its lifetime (the tables a new cell is made from)
+    life_jitter: Any  # per element: its lifetime's jitter
+    heat_cap: Any  # per element: its heat capacity
+    heat_recip: Any  # per element: 2**32 / its heat capacity
+    temp_start: Any  # per element: a new cell's temperature
     codes: Any  # per element: its behaviour's number (0: none)
     args: Any  # per element: its behaviour's arguments, float64
     stamp: Any  # per cell: frame + 1 where a behaviour changed it this frame
-    awake: Any  # per chunk: the world's wake marks, its even marks, and whether it holds behaviour cells
-    even: Any
-    held: Any
-    draws: Any  # the number of random draws this cell has taken, one uint32
+    awake: Any  # per chunk: the world's wake marks
+    even: Any  # per chunk: the world's even-heat marks
+    held: Any  # per chunk: whether it holds behaviour cells
+    draws: Any  # the random draws this cell has taken this frame, one uint32
     key: Any  # the frame's key for behaviours' randomness
-    frame: Any
-    x: Any
-    y: Any
-    element: Any
+    frame: Any  # the frame number
+    x: Any  # the cell's column
+    y: Any  # the cell's row
+    element: Any  # the cell's element
 
 
 @dataclass(frozen=True)
