@@ -56,7 +56,7 @@ def test_schema_describes_the_mod_format(tmp_path):
     assert invoke("schema", "-o", str(out)).exit_code == 0
     schema = json.loads(out.read_text())
     assert schema["title"] == "sandmod mod file" and schema["additionalProperties"] is False
-    assert set(schema["properties"]) == {"mod", "elements", "reactions", "tests"}
+    assert set(schema["properties"]) == {"mod", "elements", "reactions", "neighbours", "tests"}
     liquid = schema["$defs"]["LiquidElement"]["properties"]
     assert liquid["viscosity"]["maximum"] if "maximum" in liquid["viscosity"] else liquid["viscosity"]["exclusiveMaximum"] == 1
     assert "dispersion" in schema["$defs"]["LiquidElement"]["required"]

@@ -307,7 +307,7 @@ def test_step_calls_the_kernels_with_plain_numbers_not_literal_ones(ruleset):
 
     world = World(ruleset, 100, 70)
     step = numba.njit(kernel.step.py_func)  # typed here, so the kernels it calls are looked up (in the cache) again
-    step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0, world._fast_gain, 0)
+    step(world.state, world.tables, 1, 2, 3, 0, world.awake, world._woken, world._even, world._stirred, world._detonations, 1, 0, world._fast_gain, 0, world._seen)
     # A tile's update is checked, not what it calls: loaded from a warm cache, it types none of its calls again.
     for called in (kernel._update_tile, kernel.clear_marks, kernel._tiles_of_pass):
         assert called.signatures and not any("Literal" in str(sig) for sig in called.signatures), called

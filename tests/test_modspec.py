@@ -50,7 +50,7 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.lava]\narchetype = "liquid"\ncolor = "#ff0000"\ndensity = 5\ndispersion = 1\nglow = true\n',
             "m.toml:9:1: elements.lava.glow: unknown field; allowed here: description, color, shade, tags, "
-            "category, hidden, lifetime, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
+            "category, hidden, lifetime, shows_held, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
             "explosion, explosion_resistance, breaks_into, breaks_on_impact, ignites, extinguishes, behaviour, behaviour_args, archetype, density, dispersion, viscosity, "
             "gravity, max_speed",
         ),
@@ -67,7 +67,7 @@ def test_a_valid_mod_parses_into_its_archetype():
         (
             '[elements.wall]\narchetype = "static"\ncolor = "#123456"\ndispersion = 3\n',
             "m.toml:7:1: elements.wall.dispersion: unknown field; allowed here: description, color, shade, tags, "
-            "category, hidden, lifetime, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
+            "category, hidden, lifetime, shows_held, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
             "explosion, explosion_resistance, breaks_into, breaks_on_impact, ignites, extinguishes, behaviour, behaviour_args, archetype",
         ),
         (
@@ -108,7 +108,7 @@ def test_a_valid_mod_parses_into_its_archetype():
             "m.toml:6:1: reactions.0.b: must be an element ('water'), a tag ('#metal'), '*', or one of those after '!' "
             "(got '#wet stuff')",
         ),
-        ('[[reactions]]\na = "x"\nb = "y"\nchance = 0.5\n', "m.toml:4:1: reactions.0: a reaction needs a_becomes, b_becomes or push"),
+        ('[[reactions]]\na = "x"\nb = "y"\nchance = 0.5\n', "m.toml:4:1: reactions.0: a reaction needs a_becomes, b_becomes, a_holds, b_holds or push"),
         (
             '[elements.fog]\narchetype = "gas"\ncolor = "#eeeeee"\ndensity = 1\ndispersion = 2\n'
             'lifetime = { frames = 0, becomes = "empty" }\n',

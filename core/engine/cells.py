@@ -11,7 +11,7 @@ import numpy as np
 
 from . import hashing, traversal
 from .jit import compiled, inlined
-from .layout import ARCHETYPE_CODES, BURNING, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, mask_bit, PLUME, PLUME_RUN, PLUME_RUN_SHIFT, PLUME_SHIFT, REACTED, SCORCHED, TEMP_ONE
+from .layout import ARCHETYPE_CODES, BURNING, HELD_A, WAS_A, WAS_B, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, mask_bit, PLUME, PLUME_RUN, PLUME_RUN_SHIFT, PLUME_SHIFT, REACTED, SCORCHED, TEMP_ONE
 
 STATIC = ARCHETYPE_CODES["static"]
 POWDER = ARCHETYPE_CODES["powder"]
@@ -129,14 +129,28 @@ def _energy(temperature, cap):
     return max(T_LOW, min(T_HIGH, temperature)) * cap
 
 
+@compiled
+def referred(code, a, b, held_a, held_b):
+    """The element a reaction's code from :data:`~.layout.REFERS` up names: what the first cell (of
+    element ``a``, holding ``held_a``) or the second was, or what it held."""
+    if code == WAS_A:
+        return a
+    if code == WAS_B:
+        return b
+    return held_a if code == HELD_A else held_b
+
+
 @inlined
 def become(s, t, x, y, into, temperature, flags, roll):
-    """Cell (x, y) becomes a new cell of element ``into``: at rest, carrying nothing, at
-    ``temperature``, with exactly the flag bits ``flags``, and the shade and lifetime that
-    ``roll`` (a hash) gives it. Returns ``into``'s bit, for the mask of elements present."""
+    """Cell (x, y) becomes a new cell of element ``into``: at rest, at ``temperature``, with exactly
+    the flag bits ``flags``, and the shade and lifetime that ``roll`` (a hash) gives it; holding
+    what it held where ``into`` can hold (``Tables.remembers``), else nothing. Returns ``into``'s
+    bit, for the mask of elements present."""
     s.cells[_at(y, x)] = into
     s.shade[_at(y, x)], s.timer[_at(y, x)] = _spawn_state(roll, t.life_frames[into], t.life_jitter[into])
-    s.vx[_at(y, x)] = s.vy[_at(y, x)] = s.carry[_at(y, x)] = 0
+    s.vx[_at(y, x)] = s.vy[_at(y, x)] = 0
+    if t.remembers[into] == 0:
+        s.carry[_at(y, x)] = 0
     s.heat[_at(y, x)] = _energy(temperature, t.heat_cap[into])
     s.flags[_at(y, x)] = flags
     return _bit(into)
@@ -145,7 +159,7 @@ def become(s, t, x, y, into, temperature, flags, roll):
 @inlined
 def swap(s, x, y, px, py, carries):
     """The mover at (x, y) and the cell at (px, py) trade places: element, shade, timer, heat, and
-    what it carries where ``carries`` (particles only; they only enter empty cells).
+    what they hold where ``carries`` (either's element can hold: ``Tables.remembers``).
 
     The cell left behind takes the other's velocity and flag bits; traded up or
     down, or into an empty cell, it is done for the frame, but traded sideways a

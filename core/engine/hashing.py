@@ -23,6 +23,7 @@ SALT_BLAST = 0x4F1BBCDD
 SALT_TIMELINE = 0x7C2E9A53
 SALT_LAUNCH = 0x2F6A4C1D
 SALT_RUN = 0x5BD1E995  # where each column's runs of sinking cells begin (engine.cells._run_end)
+SALT_NEIGHBOURS = 0x6A09E667  # neighbour-count rules' rolls (sandmod.passes.counts)
 
 
 def mix32(h):

@@ -224,7 +224,7 @@ def _update_cell(s, t, x, y, e, ready, present, keys, detonations, tile, forward
 
 
 @inlined
-def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, fast):
+def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, fast):
     """Update the awake cells of rows y0..y1-1 and columns x0..x1-1 (moves may leave the region).
 
     A row of a chunk is updated when the chunk's mark in ``awake`` (from last
@@ -313,23 +313,24 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             if stir_box[0] <= stir_box[1]:  # and stir the chunks of the cells within two cells of the other
                 wx0, wy0, wx1, wy1 = _grown(stir_box[0], stir_box[2], stir_box[1], stir_box[3], width, height)
                 _wake(woken, stirred, True, wx0, wy0, wx1, wy1)
+    seen[tile] = present
     return visited - HANDED_ON_COST * handed_on if fast else 0
 
 
 @in_place
-def step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present):
+def step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
     """:func:`step_region` with its fast loop."""
-    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, True)
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, True)
 
 
 @in_place
-def step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present):
+def step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
     """:func:`step_region` without its fast loop: every cell gets the full update."""
-    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, False)
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, False)
 
 
 @compiled  # called, not inlined: inlined in the serial step it ran 3 to 7% slower (bench --against)
-def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route):
+def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route, seen):
     """Heat, then cells, in tile number ``tile`` (row-major), with or without :func:`step_region`'s fast loop (see :func:`step`)."""
     height, width = s.cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
@@ -339,17 +340,17 @@ def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
     y1 = min(y0 + TILE, height)
     conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
     if route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0)):
-        fast_gain[tile] = step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present)
+        fast_gain[tile] = step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
     else:
-        step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present)
+        step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
 
 
 @parallel
-def update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route):
+def update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles, count, also_present, fast_gain, route, seen):
     """Update the first ``count`` tiles of ``tiles`` (tile numbers, row-major) on the threads numba
     has, one tile per thread at a time."""
     for k in prange(count):
-        _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles[k], also_present, fast_gain, route)
+        _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tiles[k], also_present, fast_gain, route, seen)
 
 
 @compiled
@@ -379,12 +380,13 @@ def _tiles_of_pass(awake, woken, frame, p, hands, todo, order):
 
 
 @inlined
-def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, at_once):
+def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, at_once):
     """:func:`step`, its tiles updated by :func:`update_tiles_at_once` where ``at_once`` (a constant
     in each caller), else one after another here."""
     woken[:] = 0
     stirred[:] = 0
     detonations[:] = 0
+    seen[:] = 0
     clear_marks(s.flags, awake)
     todo = np.empty(len(detonations), np.int64)
     order = np.empty_like(todo)
@@ -393,10 +395,10 @@ def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
         if count == 0:
             continue
         if at_once:
-            update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route)
+            update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route, seen)
         else:
             for k in range(count):
-                _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order[k], also_present, fast_gain, route)
+                _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order[k], also_present, fast_gain, route, seen)
     chunks_y, chunks_x = awake.shape
     for cy in range(chunks_y):
         for cx in range(chunks_x):
@@ -407,7 +409,7 @@ def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
 
 
 @compiled
-def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route):
+def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen):
     """Advance the world by one frame, on this thread; returns how many explosives went off (see :func:`~.blasts.take_detonations`).
 
     The world is cut into tiles of 2 x 2 chunks, updated in four passes by
@@ -425,15 +427,17 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     time the tile took it: a tile takes it while it pays, and tries it again
     every FAST_TRIAL frames when it did not. ``route`` 1 sends every tile
     through the fast loop and -1 none (tests compare them); 0 chooses so.
+    ``seen`` gets, per tile, the mask of the elements in the rows updated (0:
+    none updated), for the passes after the step (:mod:`sandmod.passes`).
 
     A function of its own, not an argument of one: so that a run on one
     thread never compiles numba's parallel code, nor starts its threads.
     """
     one = np.int64(1)  # not the literal 1: numba would compile what it is passed to a second time for it
-    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, False)
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, seen, False)
 
 
 @compiled
-def step_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route):
+def step_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen):
     """:func:`step` on ``hands`` of numba's threads (numba's count set to it)."""
-    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, True)
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, True)

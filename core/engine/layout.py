@@ -41,6 +41,15 @@ HEATED, COOLED, FLAMMABLE, IGNITES, EXPLOSIVE = 1, 2, 4, 8, 16
 ALWAYS = 255
 #: Tables.react_into_a/b: the cell stays the element it is (a reaction row serves every pair it matches).
 STAYS = 0xFFFF
+#: Tables.react_into_a/b and react_holds_a/b: a cell of the pair rather than an element: what the
+#: first (A) or second (B) cell was before the reaction (WAS_), or what it held (HELD_). Every code
+#: from REFERS up is one of these (or STAYS, or KEEPS); element ids are below MAX_ELEMENTS.
+WAS_A, WAS_B, HELD_A, HELD_B = 0xFFF0, 0xFFF1, 0xFFF2, 0xFFF3
+REFERS = 0xFFF0
+#: Tables.react_holds_a/b: what the cell holds stays as it is.
+KEEPS = 0xFFFF
+#: Tables.life_into: the cell becomes what it holds.
+HELD = HELD_A
 #: Where a neighbour lies, by the kernel's numbers for it (Tables.react_group's columns): x + 1, y + 1, x - 1, y - 1.
 SIDES = ("right", "below", "left", "above")
 #: Tables.breaks_into: the element names nothing to break into (a blast destroys its cells as any other's).

@@ -50,9 +50,10 @@ def _units(energy, recip):
 
 
 @njit(cache=True)
-def colour_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorched, glow, glow_from, glow_step, glow_energy, chunks, out):
+def colour_indices(cells, carry, shade, flags, heat, heat_recip, shows_held, normal, scorched, glow, glow_from, glow_step, glow_energy, chunks, out):
     """Write every cell's colour index into ``out`` (uint16, the world's shape); ``chunks``: a
-    mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.rules.colours.Looks.glow_energy`."""
+    mask of the chunks to draw (empty: all). ``glow_energy``: :attr:`sandmod.rules.colours.Looks.glow_energy`.
+    A cell of an element that ``shows_held`` (a particle, a dye) holding an element shows that one."""
     height, width = cells.shape
     shades, scorched_shades, levels = normal.shape[1], scorched.shape[1], glow.shape[1]
     every = chunks.shape[0] == 0
@@ -64,7 +65,7 @@ def colour_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorche
             e = cells[y, x]
             tone = np.int64(shade[y, x])
             energy = np.int64(heat[y, x])
-            if carry[y, x] == 0:
+            if carry[y, x] == 0 or shows_held[e] == 0:
                 index = normal[e, (tone * shades) >> 8]
                 if (flags[y, x] & SCORCHED) != 0:
                     index = scorched[e, (tone * scorched_shades) >> 8]
@@ -74,7 +75,7 @@ def colour_indices(cells, carry, shade, flags, heat, heat_recip, normal, scorche
                         level += energy >= glow_energy[e, k]
                     hot = glow[e, level]
                     index = hot if energy >= glow_energy[e, 0] else index
-            else:  # a flying particle shows what it carries, at its own temperature
+            else:  # a flying particle shows what it carries (a dye what it holds), at its own temperature
                 shown = carry[y, x]
                 index = normal[shown, (tone * shades) >> 8]
                 if (flags[y, x] & SCORCHED) != 0:

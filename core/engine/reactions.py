@@ -7,19 +7,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cells import FRESH, GAS, LIQUID, MOVED, POWDER, _at, _bit, _cell_key, _energy, _inside, _mix32, _temperature, become
+from .cells import FRESH, GAS, LIQUID, MOVED, POWDER, _at, _bit, _cell_key, _energy, _inside, _mix32, _temperature, become, referred
 from .jit import in_place, inlined
-from .layout import BURNING, REACTED, STAYS
+from .layout import BURNING, HELD, KEEPS, REACTED, REFERS, STAYS
 
 
 @inlined
 def lifetime(s, t, x, y, e, spawn_key):
-    """Phase 2: a cell with a lifetime counts down, and at zero becomes its ``life_into`` (not while burning)."""
+    """Phase 2: a cell with a lifetime counts down, and at zero becomes its ``life_into`` (HELD:
+    what it holds), not while burning."""
     if t.life_frames[e] == 0 or (s.flags[_at(y, x)] & BURNING) != 0:
         return False, False, False, np.int64(0)
     left = s.timer[_at(y, x)]
     if left <= 1:
         into = t.life_into[e]
+        if into == HELD:
+            into = s.carry[_at(y, x)]
         temperature = _temperature(int(s.heat[_at(y, x)]), t.heat_recip[e])
         born = become(s, t, x, y, into, temperature, (s.flags[_at(y, x)] & FRESH) | MOVED, _cell_key(spawn_key, x, y))
         return True, True, True, born
@@ -82,6 +85,13 @@ def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
             continue
         into_a = e if t.react_into_a[row] == STAYS else t.react_into_a[row]
         into_b = b if t.react_into_b[row] == STAYS else t.react_into_b[row]
+        held_a = held_b = 0
+        if t.react_holds[row] != 0:  # it names what a cell holds or was (rare)
+            held_a, held_b = s.carry[_at(y, x)], s.carry[_at(ny, nx)]
+            if into_a >= REFERS:
+                into_a = referred(into_a, e, b, held_a, held_b)
+            if into_b >= REFERS:
+                into_b = referred(into_b, e, b, held_a, held_b)
         warm = t.react_heat[row]
         if into_a != e:
             born |= become(s, t, x, y, into_a, ta + warm, (flags[_at(y, x)] & FRESH) | MOVED, _cell_key(spawn_key, x, y))
@@ -89,6 +99,9 @@ def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
         if into_b != b:
             born |= become(s, t, nx, ny, into_b, tb + warm, (flags[_at(ny, nx)] & FRESH) | MOVED, _cell_key(spawn_key, nx, ny))
             stir = True
+        if t.react_holds[row] != 0:
+            hold(s, t, x, y, into_a, t.react_holds_a[row], e, b, held_a, held_b)
+            hold(s, t, nx, ny, into_b, t.react_holds_b[row], e, b, held_a, held_b)
         flags[_at(y, x)] |= REACTED
         flags[_at(ny, nx)] |= REACTED
         flew = False
@@ -100,6 +113,15 @@ def react(s, t, x, y, e, present, move_key, react_key, spawn_key):
             stir = flew = True
         return into_a != e or flew, busy, stir, born
     return False, busy, stir, born
+
+
+@in_place  # rare: called, not copied into the cell update
+def hold(s, t, x, y, now, code, a, b, held_a, held_b):
+    """After a reaction of a cell of ``a`` holding ``held_a`` with one of ``b`` holding ``held_b``, the
+    cell at (x, y), of element ``now``, holds what ``code`` names (``Tables.react_holds_a``: KEEPS
+    leaves it), where ``now`` can hold."""
+    if code != KEEPS and t.remembers[now] != 0:
+        s.carry[_at(y, x)] = referred(code, a, b, held_a, held_b) if code >= REFERS else code
 
 
 @inlined

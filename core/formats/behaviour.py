@@ -48,6 +48,7 @@ class View(NamedTuple):
     heat_cap: Any  # per element: its heat capacity
     heat_recip: Any  # per element: 2**32 / its heat capacity
     temp_start: Any  # per element: a new cell's temperature
+    remembers: Any  # per element: whether its cells keep the element they hold
     codes: Any  # per element: its behaviour's number (0: none)
     args: Any  # per element: its behaviour's arguments, float64
     stamp: Any  # per cell: frame + 1 where a behaviour changed it this frame
@@ -135,7 +136,8 @@ def look(v: View, dx: int, dy: int) -> int:
 
 def put(v: View, dx: int, dy: int, element: int) -> bool:
     """Make the cell at (dx, dy) a new cell of ``element``, as a reaction would: its own shade and
-    lifetime, at rest, at the temperature the cell had, done for the frame (no behaviour runs on
+    lifetime, at rest, at the temperature the cell had, holding what it held if ``element`` can
+    hold, done for the frame (no behaviour runs on
     it until the next), its chunk woken. False (and nothing changed) outside the world or reach."""
     raise _python_only()
 

@@ -46,6 +46,9 @@ ELEMENT_REF = rf"(?:{MOD_NAME}:)?{NAME}"
 SELECTOR = rf"!?(?:\*|#{NAME}|{ELEMENT_REF})"
 
 ElementName = Annotated[str, Field(pattern=rf"^{ELEMENT_REF}$")]
+#: What a reaction's cell becomes or holds: an element, or what one of the pair was ('@a', '@b') or held ('@a.held').
+CELL_REF = r"@[ab](?:\.held)?"
+Product = Annotated[str, Field(pattern=rf"^(?:{ELEMENT_REF}|{CELL_REF})$")]
 ModName = Annotated[str, Field(pattern=rf"^{MOD_NAME}$")]
 Tag = Annotated[str, Field(pattern=rf"^{NAME}$")]
 HexColor = Annotated[
@@ -140,7 +143,11 @@ class Lifetime(_Strict):
 
     frames: int = Field(ge=1, le=60000, description="Frames a cell lives before it turns into 'becomes'.", examples=[120])
     jitter: int = Field(0, ge=0, le=5000, description="Up to this many extra frames, chosen per cell.")
-    becomes: ElementName = Field(description="The element a cell turns into when its time is up.")
+    becomes: Annotated[str, Field(pattern=rf"^(?:{ELEMENT_REF}|@held)$")] = Field(
+        description="The element a cell turns into when its time is up; '@held': what the cell holds (a spark gives back "
+        "the metal it ran in), nothing if it holds nothing.",
+        examples=["ash", "@held"],
+    )
 
 
 Temperature = Annotated[float, Field(ge=MIN_TEMPERATURE, le=MAX_TEMPERATURE)]
@@ -269,6 +276,12 @@ class _ElementBase(_Strict):
         examples=[True],
     )
     lifetime: Lifetime | None = Field(None, description="Turn into another element after a while.")
+    shows_held: bool = Field(
+        False,
+        description="Drawn in the colours of the element each cell holds (see the reactions how-to, \"Cells that "
+        "remember\"), its own where it holds nothing: a dye's stain, a clone showing what it copies.",
+        examples=[True],
+    )
     override: bool = Field(
         False,
         description="Set to replace an element another mod defines (the key is then 'mod:element').",
@@ -518,8 +531,25 @@ class Reaction(_Strict):
 
     a: str = Field(pattern=rf"^{SELECTOR}$", description="Selector for the first cell.")
     b: str = Field(pattern=rf"^{SELECTOR}$", description="Selector for the neighbouring cell.")
-    a_becomes: ElementName | None = Field(None, description="What the first cell becomes (unchanged if left out).")
-    b_becomes: ElementName | None = Field(None, description="What the second cell becomes (unchanged if left out).")
+    a_becomes: Product | None = Field(
+        None, description="What the first cell becomes (unchanged if left out): an element, or '@b' (what the second cell "
+        "was), '@a.held' or '@b.held' (what the first or second cell holds; nothing if it holds nothing).",
+        examples=["fire", "@b.held"],
+    )
+    b_becomes: Product | None = Field(
+        None, description="What the second cell becomes (unchanged if left out); as 'a_becomes' ('@a': what the first was).",
+        examples=["@a.held"],
+    )
+    a_holds: Product | None = Field(
+        None, description="What the first cell holds afterwards (unchanged if left out): an element ('empty': nothing), "
+        "'@a' or '@b' (what the first or second cell was), '@a.held' or '@b.held'. A clone learns what touches it with "
+        "'@b'; see the reactions how-to, \"Cells that remember\".",
+        examples=["@b"],
+    )
+    b_holds: Product | None = Field(
+        None, description="What the second cell holds afterwards; as 'a_holds'. A virus keeps what it ate with '@b'.",
+        examples=["@b"],
+    )
     chance: float = Field(gt=0.0, le=1.0, description="Chance per frame that a touching pair reacts.")
     min_temperature: Temperature | None = Field(
         None, description="It happens only when the pair's mean temperature is at least this (degrees Celsius).",
@@ -562,10 +592,42 @@ class Reaction(_Strict):
 
     @model_validator(mode="after")
     def _changes_something(self) -> "Reaction":
-        if self.a_becomes is None and self.b_becomes is None and self.push is None:
-            raise ValueError("a reaction needs a_becomes, b_becomes or push")
+        if all(v is None for v in (self.a_becomes, self.b_becomes, self.a_holds, self.b_holds, self.push)):
+            raise ValueError("a reaction needs a_becomes, b_becomes, a_holds, b_holds or push")
         if self.min_temperature is not None and self.max_temperature is not None and self.min_temperature > self.max_temperature:
             raise ValueError("min_temperature must not be above max_temperature")
+        return self
+
+
+#: Which of a cell's 8 neighbours a neighbour rule counts, by name.
+NEIGHBOURHOOD = ("above", "below", "left", "right", "sides", "diagonals")
+
+
+class NeighbourRule(_Strict):
+    """A cell changes by how many of its 8 neighbours match a selector: Conway's Life is two rules
+    (an empty cell with 3 'life' around becomes 'life'; a 'life' cell with fewer than 2 or more than
+    3 becomes empty). Every rule of a frame reads the cells as that frame's movement and reactions
+    left them, and they change together, after them."""
+
+    cell: str = Field(pattern=rf"^{SELECTOR}$", description="Selector for the cells the rule changes ('empty' too).", examples=["empty"])
+    count: str = Field(pattern=rf"^{SELECTOR}$", description="Selector for the neighbours counted.", examples=["life"])
+    counts: list[Annotated[int, Field(ge=0, le=8)]] = Field(
+        min_length=1, description="The numbers of matching neighbours at which it changes (0 to 8).", examples=[[3]]
+    )
+    becomes: ElementName = Field(description="What the cell becomes.", examples=["life"])
+    chance: float = Field(1.0, gt=0.0, le=1.0, description="Chance per frame that a cell it matches changes.", examples=[0.05])
+    where: list[Literal[NEIGHBOURHOOD]] | None = Field(
+        None,
+        min_length=1,
+        description="Which neighbours are counted: 'above', 'below', 'left', 'right' (the cell on that side), 'sides' (left "
+        "and right), 'diagonals' (the four corners); all 8 if left out. A crystal grows only from one below it.",
+        examples=[["below"]],
+    )
+
+    @model_validator(mode="after")
+    def _not_everywhere(self) -> "NeighbourRule":
+        if self.cell in ("empty", "base:empty") and 0 in self.counts:
+            raise ValueError("an empty cell with none of them around would change everywhere; leave 0 out of counts")
         return self
 
 
@@ -732,6 +794,9 @@ class ModFile(_Strict):
         tables of elements made ``like`` another, as written."""
         return self._patches
     reactions: list[Reaction] = Field(default_factory=list, description="Reactions between touching cells.")
+    neighbours: list[NeighbourRule] = Field(
+        default_factory=list, description="Rules by which a cell changes with how many of its 8 neighbours match (Life, growth, crystals)."
+    )
     tests: list[ModTest] = Field(default_factory=list, description="Interaction tests, run by 'sandmod test' and pytest.")
 
     @field_validator("tests")
@@ -747,6 +812,8 @@ class ModFile(_Strict):
 PATTERN_HINTS.update(
     {
         f"^{ELEMENT_REF}$": "must be an element name like 'sand' or 'base:stone' (lower case, digits, _)",
+        f"^(?:{ELEMENT_REF}|{CELL_REF})$": "must be an element name like 'sand' or 'base:stone', or '@a', '@b', '@a.held' or '@b.held'",
+        f"^(?:{ELEMENT_REF}|@held)$": "must be an element name like 'sand' or 'base:stone', or '@held'",
         f"^{MOD_NAME}$": "must be a mod name like 'sand' or 'my-mod' (lower case, digits, _ and -)",
         f"^{NAME}$": "must be a lower-case name like 'acid_proof'",
         f"^{SELECTOR}$": "must be an element ('water'), a tag ('#metal'), '*', or one of those after '!'",

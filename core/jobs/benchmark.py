@@ -292,7 +292,7 @@ def render_peak_memory(size: int, frames: int = 4, output_format: str = "gif") -
 
 def state_bytes(world: World) -> int:
     """Bytes of everything a world keeps between steps: its cells and its chunks' bookkeeping."""
-    chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain)
+    chunks = (world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain, world._seen)
     return sum(a.nbytes for a in world.state) + sum((a if a.base is None else a.base).nbytes for a in chunks)
 
 

@@ -47,7 +47,7 @@ def compile_part(part: str) -> None:
     s, t = world.state, world.tables
     if part in PARTS[:2]:
         region = kernel.step_region_fast if part == PARTS[0] else kernel.step_region_full
-        region(s, t, 1, 2, 3, 0, world.awake, world._woken, world._stirred, world._detonations, 0, 0, 0, 4, 4, 0)
+        region(s, t, 1, 2, 3, 0, world.awake, world._woken, world._stirred, world._detonations, 0, 0, 0, 4, 4, 0, world._seen)
     elif part == "heat":
         kernel.conduct(s, t, 0, world.awake, world._woken, world._even, world._stirred, 0, 0, 4, 4)
     elif part == "blasts":

@@ -8,9 +8,12 @@ compiled again). A behaviour that does not compile is one problem naming its
 plugin, at the first step.
 
 The walk is serial, rows bottom-up and each left to right, so the frames are the
-same on any number of threads. It visits the chunks awake before or after the
-step and those that held behaviour cells after the last pass, which together
-hold every behaviour cell: whatever else is visited, the frames are the same.
+same on any number of threads. It visits the chunks that held behaviour cells
+after the last pass, and the chunks awake before or after the step in the tiles
+next to one whose updated rows held a behaviour's element (the kernel's mask,
+``World._seen``; a cell the step moved lies within a tile of where it was seen).
+Those hold every behaviour cell but one made after the step (by a blast or a
+neighbour rule), which first runs on the next frame.
 """
 
 from __future__ import annotations
@@ -21,15 +24,18 @@ import os
 import re
 import sys
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from ..engine.kernelcache import kernel_cache_dir
+from ..engine.layout import CHUNK, TILE, mask_bit
 from ..errors import Problem, ProblemsError
 from ..formats.behaviour import View
-from ..rules.behaviours import Behaviours
 from . import generated
+
+#: A ruleset's behaviours (sandmod.rules.behaviours.Behaviours; the world hands them over).
+Behaviours = Any
 
 #: The salt of the behaviours' frame key (see sandmod.engine.hashing).
 SALT_BEHAVIOUR = 0x3A8F05C5
@@ -89,15 +95,33 @@ class Walker:
         self.stamp = np.zeros(shape, np.uint32)  # frame + 1 where a behaviour changed the cell
         self.held = np.ones(chunks, np.uint8)  # chunks that may hold behaviour cells: all, at first
         self._run: Callable | None = None  # the compiled pass, once found
+        self.mask = 0  # the element-mask bits of the elements with a behaviour
+        for element in np.flatnonzero(table.codes):
+            self.mask |= 1 << mask_bit(int(element))
+        self.tiles = (-(-shape[0] // TILE), -(-shape[1] // TILE))
+
+    def visited(self, world, before: np.ndarray) -> np.ndarray:
+        """The chunks to walk: those that held behaviour cells, and those awake before or after
+        the step within a tile of one whose updated rows held a behaviour's element."""
+        seen = (world._seen.reshape(self.tiles) & np.int64(self.mask)) != 0
+        near = seen.copy()
+        near[1:] |= seen[:-1]
+        near[:-1] |= seen[1:]
+        around = near.copy()
+        around[:, 1:] |= near[:, :-1]
+        around[:, :-1] |= near[:, 1:]
+        per = TILE // CHUNK
+        chunks = np.repeat(np.repeat(around, per, 0), per, 1)[: self.held.shape[0], : self.held.shape[1]]
+        return (((before != 0) | (world.awake != 0)) & chunks | (self.held != 0)).astype(np.uint8)
 
     def run(self, world, before: np.ndarray, key: int) -> None:
         """Run the behaviours of ``world``'s cells (``before``: its wake marks before the step)."""
-        visit = ((before != 0) | (world.awake != 0) | (self.held != 0)).astype(np.uint8)
+        visit = self.visited(world, before)
         if not visit.any():
             return
         run = self._run = self._run or compiled_pass(self.table)
         s, t = world.state, world.tables
-        arrays = (*s, t.life_frames, t.life_jitter, t.heat_cap, t.heat_recip, t.temp_start, self.table.codes, self.table.args, self.stamp, world.awake, world._even, self.held)
+        arrays = (*s, t.life_frames, t.life_jitter, t.heat_cap, t.heat_recip, t.temp_start, t.remembers, self.table.codes, self.table.args, self.stamp, world.awake, world._even, self.held)
         if run.signatures:
             run(*arrays, visit, key, world.frame)
             return

@@ -23,7 +23,7 @@ _given = functions_for("{key}")
 
 @njit(cache=True)
 def run(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitter, heat_cap, heat_recip, temp_start,
-        codes, args, stamp, awake, even, held, visit, key, frame):
+        remembers, codes, args, stamp, awake, even, held, visit, key, frame):
     """Each cell of the visited chunks whose element has a behaviour, and was not changed by
     one this frame, runs it: rows bottom-up, each left to right."""
     height, width = cells.shape
@@ -47,7 +47,7 @@ def run(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitte
                     held[cy, cx] = 1
                     draws[0] = 0
                     v = View(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitter, heat_cap,
-                             heat_recip, temp_start, codes, args, stamp, awake, even, held, draws, key, frame,
+                             heat_recip, temp_start, remembers, codes, args, stamp, awake, even, held, draws, key, frame,
                              np.int64(x), np.int64(y), np.int64(element))
 {dispatch}
 '''

@@ -87,7 +87,9 @@ def _put(v, dx, dy, element):
         h = _mix32(_mix32(v.key ^ SALT_BORN) ^ ((y << 16) | x))
         v.cells[y, x] = element
         v.shade[y, x], v.timer[y, x] = _spawn_state(h, v.life_frames[element], v.life_jitter[element])
-        v.vx[y, x] = v.vy[y, x] = v.carry[y, x] = 0
+        v.vx[y, x] = v.vy[y, x] = 0
+        if v.remembers[element] == 0:
+            v.carry[y, x] = 0  # what it held, kept where the new element can hold (as the kernel's become)
         v.heat[y, x] = warmth * v.heat_cap[element]
         v.flags[y, x] = MOVED | LOOSE
         _touched(v, x, y)

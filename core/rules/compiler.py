@@ -39,6 +39,7 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     EXPLOSIVE,
     FLAMMABLE,
     HEATED,
+    HELD,
     IGNITES,
     MAX_ELEMENTS,
     SIDES,
@@ -55,6 +56,7 @@ from .colours import SCORCH_DARKEN, SCORCHED_SHADES, SHADES, Looks, colour_table
 from .definitions import Definition, Override, collect_definitions, required_below, resolve_name
 from .glow import GLOW_COLOURS, GLOW_FROM, GLOW_MIX, GLOW_STEP  # noqa: F401  (names the other modules take from here too)
 from .modset import LoadedMod
+from .neighbours import NeighbourTables, compile_neighbours
 from .reactions import NO_REACTION, CompiledReaction, PairReaction, by_partners, compile_reactions, element_masks, pair_reaction, reaction_rows  # noqa: F401
 from ..formats.modspec import EMPTY_ID, PARTICLE_ID, Element
 from ..formats.tomlsource import TomlSource
@@ -78,20 +80,25 @@ class Tables(NamedTuple):
     rest_chance: np.ndarray  # uint32[n]: roll threshold to rest a frame (viscosity)
     life_frames: np.ndarray  # uint16[n]: frames before decay, 0 = forever
     life_jitter: np.ndarray  # uint16[n]: extra frames, chosen per cell
-    life_into: np.ndarray  # uint16[n]: what a cell decays into
+    life_into: np.ndarray  # uint16[n]: what a cell decays into; HELD: what it holds
     reactive: np.ndarray  # int64[n]: partner mask: bit b % 64 set when the element reacts with some b (0: none)
     displace: np.ndarray  # uint8[n, n]: chance (of ALWAYS) that a moving cell of a trades places with a cell of b; 0: never
     displaces: np.ndarray  # int64[n]: mask: bit b % 64 set when a may swap with some b (a first test, like reactive)
     react_pair: np.ndarray  # uint16[n, n]: the reactions (a row of react_group) of a cell of a touching one of b; 0: none
     react_group: np.ndarray  # uint16[g, 4]: per side the neighbour lies on (SIDES), its reaction: a row of the tables below; 0: none
     react_chance: np.ndarray  # uint32[r]: roll threshold per frame of contact (row 0, no reaction: 0)
-    react_into_a: np.ndarray  # uint16[r]: what a becomes; STAYS: it stays as it is
+    react_into_a: np.ndarray  # uint16[r]: what a becomes; STAYS: it stays as it is; from REFERS up: a cell of the pair
     react_into_b: np.ndarray  # uint16[r]: what b becomes; STAYS: it stays as it is
     react_tsum_min: np.ndarray  # int32[r]: lowest T_a + T_b (TEMP_ONE units) at which the pair reacts
     react_tsum_max: np.ndarray  # int32[r]: highest T_a + T_b
     react_heat: np.ndarray  # int32[r]: temperature added to a cell that changes, TEMP_ONE units
     react_push_a: np.ndarray  # int32[r]: a flies off, away from b, at this speed (SUBCELL units), as particle[0]; 0: it stays
     react_push_b: np.ndarray  # int32[r]: b flies off, away from a
+    react_holds_a: np.ndarray  # uint16[r]: what a holds afterwards (an element, or a code from REFERS up); KEEPS: unchanged
+    react_holds_b: np.ndarray  # uint16[r]: what b holds afterwards
+    react_holds: np.ndarray  # uint8[r]: 1 where the row names what a cell holds or was (into_ or holds_ from REFERS up)
+    remembers: np.ndarray  # uint8[n]: a cell of it can hold an element (State.carry): particles, and those rules give one
+    shows_held: np.ndarray  # uint8[n]: a cell of it holding an element is drawn as that element (particles, shows_held)
     particle: np.ndarray  # uint16[1]: base:particle, what pushed cells fly as
     # Heat. A cell stores its heat energy, capacity x temperature.
     heat_cap: np.ndarray  # int64[n]: heat capacity, CAP_ONE units
@@ -173,6 +180,8 @@ class Ruleset:
     _ids: dict[str, int] = field(default_factory=dict, repr=False)
     #: What loads but may not be what the mods' authors meant: one field patched by two mods that do not require each other.
     warnings: tuple[Problem, ...] = ()
+    #: The neighbour-count rules, compiled (None: the mods have none).
+    neighbours: NeighbourTables | None = None
     #: The plugin behaviours its elements name; None when none does (its worlds never run them).
     behaviours: Behaviours | None = None
 
@@ -247,7 +256,9 @@ def compile_mods(mods: Sequence[LoadedMod], behaviours: Mapping[str, Registered[
         _fill_element(t, info, d, problems)
         mod = by_mod[d.mod]
         if info.spec.lifetime is not None:
-            into = resolve(info.spec.lifetime.becomes, mod, d.loc + ("lifetime", "becomes"))
+            held = info.spec.lifetime.becomes == "@held"
+            into = HELD if held else resolve(info.spec.lifetime.becomes, mod, d.loc + ("lifetime", "becomes"))
+            t.remembers[info.index] |= held
             if into is not None:
                 t.life_frames[info.index] = info.spec.lifetime.frames
                 t.life_jitter[info.index] = info.spec.lifetime.jitter
@@ -265,6 +276,11 @@ def compile_mods(mods: Sequence[LoadedMod], behaviours: Mapping[str, Registered[
                 t.carries[info.index] = what
         _fill_breaking(t, info, elements, named, lambda message: problems.append(d.source.problem(d.loc + ("breaks_into",), message)))
     _fill_displacement(t, elements)
+    particles = [e.index for e in elements if e.spec.archetype == "particle"]
+    t.remembers[particles] = t.shows_held[particles] = 1
+    for info in elements:
+        if info.spec.shows_held:
+            t.remembers[info.index] = t.shows_held[info.index] = 1
     at = lambda i: defs[elements[i].id]  # noqa: E731  (the definition in force of element i)
     behaving = compile_behaviours(
         elements,
@@ -273,12 +289,13 @@ def compile_mods(mods: Sequence[LoadedMod], behaviours: Mapping[str, Registered[
         lambda i: lambda ref, *field: resolve(ref, by_mod[at(i).mod], at(i).loc + field),
     )
     reactions, t = compile_reactions(mods, elements, t, resolve, problems, warnings, below)
+    neighbours = compile_neighbours(mods, elements, resolve)
     t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
     colours, looks = colour_table(elements, t.heat_recip)
-    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings), behaving)
+    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings), neighbours=neighbours, behaviours=behaving)
 
 
 def _numbered(defs: dict[str, "Definition"], order: Sequence[str]) -> tuple[ElementInfo, ...]:
@@ -471,6 +488,8 @@ def _empty_tables(n: int) -> Tables:
         life_frames=np.zeros(n, np.uint16),
         life_jitter=np.zeros(n, np.uint16),
         life_into=np.zeros(n, np.uint16),
+        remembers=np.zeros(n, np.uint8),
+        shows_held=np.zeros(n, np.uint8),
         reactive=np.zeros(n, np.int64),
         displace=np.zeros((n, n), np.uint8),
         displaces=np.zeros(n, np.int64),

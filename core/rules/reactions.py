@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, NamedTuple, Sequence
 import numpy as np
 
 from ..engine.hashing import chance_threshold
-from ..engine.layout import MAX_TEMPERATURE, MIN_TEMPERATURE, SIDES, STAYS, SUBCELL, mask_bit, temperature_units
+from ..engine.layout import HELD_A, HELD_B, KEEPS, MAX_TEMPERATURE, MIN_TEMPERATURE, REFERS, SIDES, STAYS, SUBCELL, WAS_A, WAS_B, mask_bit, temperature_units
 from ..errors import Problem
 from ..formats.modspec import Reaction
 from .definitions import resolve_name
@@ -99,18 +99,24 @@ def compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, be
             loc = ("reactions", number)
             side_a = _select(reaction.a, elements, lambda r: resolve(r, mod, loc + ("a",)))
             side_b = _select(reaction.b, elements, lambda r: resolve(r, mod, loc + ("b",)))
-            into_a = None if reaction.a_becomes is None else resolve(reaction.a_becomes, mod, loc + ("a_becomes",))
-            into_b = None if reaction.b_becomes is None else resolve(reaction.b_becomes, mod, loc + ("b_becomes",))
-            if side_a is None or side_b is None or (reaction.a_becomes and into_a is None) or (reaction.b_becomes and into_b is None):
+            named = {field: product(getattr(reaction, field), lambda r, f=field: resolve(r, mod, loc + (f,)))
+                     for field in ("a_becomes", "b_becomes", "a_holds", "b_holds")}
+            if side_a is None or side_b is None or None in named.values():
                 continue
             (set_a, score_a), (set_b, score_b) = side_a, side_b
+            into_a, into_b = (None if named[f] == STAYS else named[f] for f in ("a_becomes", "b_becomes"))
+            holds_a, holds_b = named["a_holds"], named["b_holds"]
+            _can_hold(t, set_a, into_a, holds_a)
+            _can_hold(t, set_b, into_b, holds_b)
             threshold = chance_threshold(reaction.chance)
             low = -(2**31) if reaction.min_temperature is None else 2 * temperature_units(reaction.min_temperature)
             high = 2**31 - 1 if reaction.max_temperature is None else 2 * temperature_units(reaction.max_temperature)
             rest = (threshold, low, high, temperature_units(reaction.heat))
             first, second = (STAYS if into is None else into for into in (into_a, into_b))
             push = round((reaction.push or 0) * SUBCELL)
-            forward, backward = (first, second, *rest, 0, push), (second, first, *rest, push, 0)
+            refers = int(any(c >= REFERS and c != STAYS for c in (first, second)) or (holds_a, holds_b) != (KEEPS, KEEPS))
+            forward = (first, second, *rest, 0, push, holds_a, holds_b, refers)
+            backward = (*map(_swapped, (second, first)), *rest, push, 0, *map(_swapped, (holds_b, holds_a)), refers)
             rank = (score_a + score_b, reaction.priority)
             sides = _sides(reaction.where)
             for i in sorted(set_a):
@@ -118,10 +124,10 @@ def compile_reactions(mods, elements, t: Tables, resolve, problems, warnings, be
                     out_i = i if into_a is None else into_a
                     out_j = j if into_b is None else into_b
                     for d in sides:
-                        claim((i, j, d), (out_i, out_j, *rest, 0, push), forward, rank, mod, number)
+                        claim((i, j, d), (out_i, out_j, *rest, 0, push, *forward[-3:]), forward, rank, mod, number)
                         opposite = (d + 2) % len(SIDES)  # the same contact, seen from the other cell
                         if i != j or opposite not in sides:  # (of one element: whichever looks first is a)
-                            claim((j, i, opposite), (out_j, out_i, *rest, push, 0), backward, rank, mod, number)
+                            claim((j, i, opposite), (out_j, out_i, *rest, push, 0, *backward[-3:]), backward, rank, mod, number)
             compiled.append(
                 CompiledReaction(
                     mod.name, reaction, tuple(elements[i].id for i in sorted(set_a)), tuple(elements[j].id for j in sorted(set_b))
@@ -144,7 +150,34 @@ def _sides(where: list[str] | None) -> list[int]:
 
 
 #: Row 0 of the reaction tables: what a pair without a reaction reads.
-NO_REACTION = (STAYS, STAYS, 0, -(2**31), 2**31 - 1, 0, 0, 0)
+NO_REACTION = (STAYS, STAYS, 0, -(2**31), 2**31 - 1, 0, 0, 0, KEEPS, KEEPS, 0)
+#: The words for a cell of the pair in a_becomes, b_becomes, a_holds and b_holds, by the kernel's codes.
+CELL_WORDS = {"@a": WAS_A, "@b": WAS_B, "@a.held": HELD_A, "@b.held": HELD_B}
+
+
+def product(written: str | None, resolve) -> int | None:
+    """A reaction's ``*_becomes`` or ``*_holds`` as the kernel reads it: STAYS (KEEPS) where left out, a
+    code from REFERS up for a cell of the pair, or an element's id (None: unknown, a problem noted)."""
+    if written is None:
+        return STAYS
+    return CELL_WORDS[written] if written.startswith("@") else resolve(written)
+
+
+def _swapped(code: int) -> int:
+    """A code seen from the other cell of the pair: what names the first cell names the second."""
+    pairs = {WAS_A: WAS_B, WAS_B: WAS_A, HELD_A: HELD_B, HELD_B: HELD_A}
+    return pairs.get(code, code)
+
+
+def _can_hold(t: Tables, cells: set[int], into: int | None, holds: int) -> None:
+    """A reaction gives the cells of ``cells`` something to hold: what they are afterwards can hold
+    (``Tables.remembers``); afterwards is ``into`` unless that is left out or names a cell of the pair."""
+    if holds == KEEPS:
+        return
+    if into is None:
+        t.remembers[sorted(cells)] = 1
+    elif into < REFERS:
+        t.remembers[into] = 1
 
 
 class PairReaction(NamedTuple):
@@ -158,6 +191,8 @@ class PairReaction(NamedTuple):
     heat: int  # temperature added to a cell that changes, TEMP_ONE units
     push_a: int  # speed a flies off at, SUBCELL units (0: it stays)
     push_b: int
+    holds_a: int  # what a holds afterwards (KEEPS: unchanged; from REFERS up: a cell of the pair)
+    holds_b: int
 
 
 def pair_reaction(t: Tables, a: int, b: int, side: str | None = None) -> PairReaction | None:
@@ -170,16 +205,18 @@ def pair_reaction(t: Tables, a: int, b: int, side: str | None = None) -> PairRea
     into_a, into_b = (int(t.react_into_a[row]), int(t.react_into_b[row]))
     return PairReaction(int(t.react_chance[row]), a if into_a == STAYS else into_a, b if into_b == STAYS else into_b,
                         int(t.react_tsum_min[row]), int(t.react_tsum_max[row]), int(t.react_heat[row]),
-                        int(t.react_push_a[row]), int(t.react_push_b[row]))
+                        int(t.react_push_a[row]), int(t.react_push_b[row]), int(t.react_holds_a[row]), int(t.react_holds_b[row]))
 
 
 def reaction_rows(rows: Sequence[tuple]) -> dict[str, np.ndarray]:
     """The react_ tables (but react_pair and react_group) of these rows: (a becomes, b becomes, threshold,
-    lowest and highest T sum, heat, a's push, b's push) each, STAYS for a cell that stays."""
+    lowest and highest T sum, heat, a's push, b's push, a holds, b holds, whether it names a cell's
+    memory) each, STAYS for a cell that stays, KEEPS for what a cell holds left as it is."""
     columns = list(zip(*rows))
     names_types = (("react_into_a", np.uint16), ("react_into_b", np.uint16), ("react_chance", np.uint32),
                    ("react_tsum_min", np.int32), ("react_tsum_max", np.int32), ("react_heat", np.int32),
-                   ("react_push_a", np.int32), ("react_push_b", np.int32))
+                   ("react_push_a", np.int32), ("react_push_b", np.int32), ("react_holds_a", np.uint16),
+                   ("react_holds_b", np.uint16), ("react_holds", np.uint8))
     return {name: np.array(column, kind) for (name, kind), column in zip(names_types, columns)}
 
 
@@ -218,7 +255,8 @@ def _endless_reactions(winner: dict, elements: Sequence[ElementInfo]) -> list[Pr
     always = {
         pair: (first, second)
         for pair, (_, _, _, (first, second, _, low, high, *_), _) in winner.items()
-        if low <= every[0] and high >= every[1] and (first, second) != pair and all(stuck(e) for e in (*pair, first, second))
+        if low <= every[0] and high >= every[1] and (first, second) != pair and max(first, second) < REFERS
+        and all(stuck(e) for e in (*pair, first, second))
     }
     problems: list[Problem] = []
     reported: set = set()

@@ -75,7 +75,7 @@ class State(NamedTuple):
     flags: np.ndarray  # uint8: kernel flags
     vx: np.ndarray  # int16: velocity, 1/256ths of a cell per frame, right positive
     vy: np.ndarray  # int16: velocity, down positive
-    carry: np.ndarray  # uint16: what a flying particle carries (0 elsewhere)
+    carry: np.ndarray  # uint16: what a flying particle carries, or a cell holds (0: nothing)
     heat: np.ndarray  # int32: heat energy, heat_cap x temperature (fixed point, see compiler)
 
 
@@ -273,6 +273,7 @@ class World:
         self._stirred = _on_own_lines(chunks, np.uint8)  # the kernel's scratch: chunks whose heat or elements changed
         self._detonations = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile, during a step
         self._fast_gain = np.zeros(-(-height // TILE) * -(-width // TILE), np.int64)  # per tile: did the kernel's fast loop pay?
+        self._seen = np.zeros_like(self._fast_gain)  # per tile: the mask of the elements in the rows the last step updated
         self._also_present = 0  # -1: the kernel looks for partners next to every cell, none skipped (for tests)
         self._fast_route = 0  # 1: every tile through the kernel's fast loop, -1: none (for tests); 0: as it pays
         self.threads = None  # threads to step on; None: as many as pay (see sandmod.engine.threads)
@@ -466,7 +467,7 @@ class World:
 
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
-        the kernel updates every cell, explosions go off."""
+        the kernel updates every cell, neighbour rules change cells, explosions go off."""
         kernel = _kernel()
         for number, emitter in enumerate(self.emitters):
             if emitter.active(self.frame):
@@ -508,9 +509,14 @@ class World:
             self._also_present,
             self._fast_gain,
             self._fast_route,
+            self._seen,
         )
         if self.threads is None:
             self._chooser.timed(perf_counter() - started)
+        if self.ruleset.neighbours is not None:
+            from ..passes.counts import apply_neighbour_rules
+
+            apply_neighbour_rules(self)
         if went_off:  # top to bottom, left to right, whichever thread found them
             self._explode(kernel.take_detonations(self.state, self.tables, self._detonations), 0)
         due = [row for frame, row in self.scheduled if frame == self.frame]
@@ -550,14 +556,17 @@ class World:
         With ``carried``, a flying particle counts as what it carries, so the
         totals show what motion alone can neither create nor lose.
         """
-        cells = self.shown() if carried else self.cells
+        s = self.state
+        flying = self.tables.archetype[s.cells] == ARCHETYPE_CODES["particle"]
+        cells = np.where(flying & (s.carry != 0), s.carry, s.cells) if carried else s.cells
         numbers = np.bincount(cells.ravel(), minlength=len(self.ruleset.elements))
         return {e.id: int(numbers[e.index]) for e in self.ruleset.by_id if numbers[e.index]}
 
     def shown(self) -> np.ndarray:
-        """The element each cell shows: its own, or for a particle, what it carries."""
+        """The element each cell shows: its own, or what it carries (a particle) or holds (an element
+        that ``shows_held``)."""
         s = self.state
-        return np.where(s.carry != 0, s.carry, s.cells)
+        return np.where((s.carry != 0) & (self.tables.shows_held[s.cells] != 0), s.carry, s.cells)
 
     def image(self, out: np.ndarray | None = None, changed_only: bool = False, rgb: np.ndarray | None = None,
               colours: np.ndarray | None = None) -> np.ndarray:
@@ -578,7 +587,7 @@ class World:
         out = np.empty((self.height, self.width), np.uint16) if out is None else out
         chunks = self._take_changed() if changed_only else _ALL_CHUNKS
         pixels.colour_indices(
-            s.cells, s.carry, s.shade, s.flags, s.heat, self.tables.heat_recip,
+            s.cells, s.carry, s.shade, s.flags, s.heat, self.tables.heat_recip, self.tables.shows_held,
             looks.normal, looks.scorched, looks.glow, looks.glow_from, _GLOW_STEP, looks.glow_energy, chunks, out,
         )
         if rgb is not None:

@@ -130,7 +130,7 @@ def _use(world: World, count: int | None, parallel_step: bool) -> None:
 
 def _arrays(world: World) -> tuple[np.ndarray, ...]:
     """Everything a step reads or writes: the cells' state and the chunks' marks."""
-    return (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain)
+    return (*world.state, world.awake, world._woken, world._even, world._stirred, world._detonations, world._fast_gain, world._seen)
 
 
 def saved(world: World) -> list[np.ndarray]:
