@@ -88,6 +88,24 @@ def test_a_behaviour_makes_one_cell_a_frame_across_sleeping_chunks():
     assert (world.cells == vine).sum() == 41 and (column[23:] == vine).all()  # one a frame, up across a chunk's edge
 
 
+def test_the_pass_walks_no_chunk_far_from_behaviour_cells_however_busy():
+    rs = rules(("climb", climb), elements={
+        "vine": {**STATIC, "behaviour": "lab:climb", "behaviour_args": {"into": "vine"}},
+        "grain": {"archetype": "powder", "color": "#ccaa66", "density": 1500},
+    })
+    world = World(rs, 256, 64)
+    world.paint_cells(np.array([63]), np.array([5]), rs.index("lab:vine"))
+    ys, xs = np.mgrid[0:20, 192:240]
+    world.paint_cells(ys.ravel(), xs.ravel(), rs.index("lab:grain"))
+    for _ in range(3):
+        before = world.awake.copy()
+        world.step()
+        visited = world._walker.visited(world, before)
+        assert world.awake[:, 6:].any()  # the grains' chunks are busy...
+        assert not visited[:, 4:].any() and visited[1, 0]  # ...and never walked: only the vine's, and those near it
+    assert (world.cells == rs.index("lab:vine")).sum() == 4
+
+
 def test_swap_walks_a_cell_one_step_a_frame():
     rs = rules(("walk", walk), elements={"ant": {**STATIC, "behaviour": "lab:walk"}})
     world = World(rs, 100, 8)
