@@ -344,3 +344,39 @@ def test_a_new_behaviour_compiles_alone_and_the_kernel_is_loaded_from_its_cache(
     assert int(cells) == 2  # the vine grew a cell
     assert kernel_index_files() == before  # no kernel compiled, none added to
     print(f"a new behaviours pass compiled in {seconds} s")
+
+
+GARDEN_STEP = """
+import hashlib, sys
+sys.path.insert(0, sys.argv[1])
+import sandmod_garden
+from sandmod.registry import collect, make_plugin_manager
+from sandmod.world.loading import load_world
+from sandmod.world.snapshots import load_snapshot, save_snapshot
+pm = make_plugin_manager(entry_points=False)
+pm.register(sandmod_garden, name="garden")
+registry = collect(pm)
+path = sys.argv[1] + "/garden.toml"
+
+def digest(world):
+    return hashlib.sha256(b"".join(a.tobytes() for a in (*world.state, world.awake))).hexdigest()
+
+straight = load_world(path, registry=registry).world
+straight.run(160)
+before = load_world(path, registry=registry).world
+before.run(70)
+save_snapshot(before, sys.argv[2])
+before.run(30)  # a walker that has run, then a snapshot loaded into its world
+load_snapshot(before, sys.argv[2])
+before.run(90)
+resumed = load_world(path, registry=registry).world
+load_snapshot(resumed, sys.argv[2])
+resumed.run(90)
+print(digest(straight) == digest(before) == digest(resumed), straight.counts()["garden:vine"] > 100)
+"""
+
+
+def test_a_garden_resumed_from_a_snapshot_grows_as_it_would_have(tmp_path):
+    done = subprocess.run([sys.executable, "-c", GARDEN_STEP, str(GARDEN), str(tmp_path / "s.npz")], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["True", "True"]

@@ -93,7 +93,7 @@ class Walker:
     def __init__(self, table: Behaviours, shape: tuple[int, int], chunks: tuple[int, int]):
         self.table = table
         self.stamp = np.zeros(shape, np.uint32)  # frame + 1 where a behaviour changed the cell
-        self.held = np.ones(chunks, np.uint8)  # chunks that may hold behaviour cells: all, at first
+        self.held = np.zeros(chunks, np.uint8)  # chunks that hold behaviour cells (exactly, after each pass)
         self._run: Callable | None = None  # the compiled pass, once found
         self.mask = 0  # the element-mask bits of the elements with a behaviour
         for element in np.flatnonzero(table.codes):
@@ -113,6 +113,13 @@ class Walker:
         per = TILE // CHUNK
         chunks = np.repeat(np.repeat(around, per, 0), per, 1)[: self.held.shape[0], : self.held.shape[1]]
         return (((before != 0) | (world.awake != 0)) & chunks | (self.held != 0)).astype(np.uint8)
+
+    def hold(self, cells: np.ndarray) -> None:
+        """Mark the chunks that hold behaviour cells now (when a walker starts: on a world's first
+        step, or the first after a snapshot is loaded, it is what the last pass would have left)."""
+        behaving = self.table.codes[cells] != 0
+        rows = np.add.reduceat(behaving, np.arange(0, cells.shape[0], CHUNK), axis=0)
+        self.held[:] = np.add.reduceat(rows, np.arange(0, cells.shape[1], CHUNK), axis=1) != 0
 
     def run(self, world, before: np.ndarray, key: int) -> None:
         """Run the behaviours of ``world``'s cells (``before``: its wake marks before the step)."""

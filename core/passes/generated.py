@@ -14,7 +14,7 @@ import numpy as np
 from sandmod.engine.jit import njit
 from sandmod.engine.layout import CHUNK_SHIFT
 from sandmod.formats.behaviour import View
-from sandmod.passes import helpers  # noqa: F401  (the helpers' compiled forms)
+from sandmod.passes import helpers  # the helpers' compiled forms, and recheck
 from sandmod.passes.behaviours import functions_for
 
 _given = functions_for("{key}")
@@ -24,6 +24,15 @@ _given = functions_for("{key}")
 @njit(cache=True)
 def run(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitter, heat_cap, heat_recip, temp_start,
         remembers, codes, args, stamp, awake, even, held, visit, key, frame):
+    """The walk, then which chunks hold behaviour cells, exactly."""
+    _walk(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitter, heat_cap, heat_recip, temp_start,
+          remembers, codes, args, stamp, awake, even, held, visit, key, frame)
+    helpers.recheck(cells, codes, held)
+
+
+@njit
+def _walk(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitter, heat_cap, heat_recip, temp_start,
+          remembers, codes, args, stamp, awake, even, held, visit, key, frame):
     """Each cell of the visited chunks whose element has a behaviour, and was not changed by
     one this frame, runs it: rows bottom-up, each left to right."""
     height, width = cells.shape
@@ -44,7 +53,7 @@ def run(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitte
                     code = codes[element]
                     if code == 0 or stamp[y, x] == done:
                         continue
-                    held[cy, cx] = 1
+                    held[cy, cx] = max(held[cy, cx], 1)  # 2 (to be checked again) stays
                     draws[0] = 0
                     v = View(cells, shade, timer, flags, vx, vy, carry, heat, life_frames, life_jitter, heat_cap,
                              heat_recip, temp_start, remembers, codes, args, stamp, awake, even, held, draws, key, frame,

@@ -46,17 +46,36 @@ def _temperature_units(v, x, y):
 
 
 @njit
-def _touched(v, x, y):
-    """Cell (x, y) was changed by a behaviour: done for the frame, its chunks woken, and held
-    (walked next frame) when it is a behaviour's element."""
+def _touched(v, x, y, was):
+    """Cell (x, y), element ``was`` before, was changed by a behaviour: done for the frame, its
+    chunks woken; its chunk held (walked next frame) if it is a behaviour's element now, and
+    to be checked again (2) if it was one."""
     v.stamp[y, x] = np.uint32((v.frame + 1) & 0xFFFFFFFF)
     height, width = v.cells.shape
     for qy in (max(y - WAKE_MARGIN, 0), min(y + WAKE_MARGIN, height - 1)):
         for qx in (max(x - WAKE_MARGIN, 0), min(x + WAKE_MARGIN, width - 1)):
             v.awake[qy >> CHUNK_SHIFT, qx >> CHUNK_SHIFT] = WHOLE
             v.even[qy >> CHUNK_SHIFT, qx >> CHUNK_SHIFT] = 0
-    if v.codes[v.cells[y, x]] != 0:
-        v.held[y >> CHUNK_SHIFT, x >> CHUNK_SHIFT] = 1
+    cy, cx = y >> CHUNK_SHIFT, x >> CHUNK_SHIFT
+    if v.codes[was] != 0:
+        v.held[cy, cx] = 2
+    elif v.codes[v.cells[y, x]] != 0:
+        v.held[cy, cx] = max(v.held[cy, cx], 1)
+
+
+@njit
+def recheck(cells, codes, held):
+    """Chunks marked 2 (a behaviour cell changed there): 1 if they still hold one, else 0."""
+    height, width = cells.shape
+    chunks_y, chunks_x = held.shape
+    for cy in range(chunks_y):
+        for cx in range(chunks_x):
+            if held[cy, cx] == 2:
+                held[cy, cx] = 0
+                for y in range(cy << CHUNK_SHIFT, min((cy + 1) << CHUNK_SHIFT, height)):
+                    for x in range(cx << CHUNK_SHIFT, min((cx + 1) << CHUNK_SHIFT, width)):
+                        if codes[cells[y, x]] != 0:
+                            held[cy, cx] = 1
 
 
 @overload(api.look)
@@ -83,6 +102,7 @@ def _put(v, dx, dy, element):
         if not _reaches(v, dx, dy) or not 0 <= element < len(v.codes):
             return False
         x, y = v.x + dx, v.y + dy
+        was = v.cells[y, x]
         warmth = max(T_LOW, min(T_HIGH, _temperature_units(v, x, y)))
         h = _mix32(_mix32(v.key ^ SALT_BORN) ^ ((y << 16) | x))
         v.cells[y, x] = element
@@ -92,7 +112,7 @@ def _put(v, dx, dy, element):
             v.carry[y, x] = 0  # what it held, kept where the new element can hold (as the kernel's become)
         v.heat[y, x] = warmth * v.heat_cap[element]
         v.flags[y, x] = MOVED | LOOSE
-        _touched(v, x, y)
+        _touched(v, x, y, was)
         return True
 
     return put
@@ -104,6 +124,7 @@ def _swap(v, dx, dy):
         if not _reaches(v, dx, dy):
             return False
         x, y, qx, qy = v.x, v.y, v.x + dx, v.y + dy
+        was, other = v.cells[y, x], v.cells[qy, qx]
         for a in (v.cells, v.carry):
             a[y, x], a[qy, qx] = a[qy, qx], a[y, x]
         v.shade[y, x], v.shade[qy, qx] = v.shade[qy, qx], v.shade[y, x]
@@ -112,8 +133,8 @@ def _swap(v, dx, dy):
         v.heat[y, x], v.heat[qy, qx] = v.heat[qy, qx], v.heat[y, x]
         for a in (v.vx, v.vy):
             a[y, x], a[qy, qx] = a[qy, qx], a[y, x]
-        _touched(v, x, y)
-        _touched(v, qx, qy)
+        _touched(v, x, y, was)
+        _touched(v, qx, qy, other)
         return True
 
     return swap

@@ -533,6 +533,7 @@ class World:
 
         if self._walker is None or self._walker.table is not self.ruleset.behaviours:
             self._walker = Walker(self.ruleset.behaviours, (self.height, self.width), self.awake.shape)
+            self._walker.hold(self.cells)
         self._walker.run(self, before, frame_key(self.seed, self.frame, SALT_BEHAVIOUR))
 
     def _thread_count(self) -> int:
@@ -639,7 +640,6 @@ class World:
         versions than it was made with); ProblemsError if it does not fit or is not a snapshot."""
         from .snapshots import load_snapshot
 
-        self._walker = None  # which chunks hold behaviour cells is not in a snapshot: all are walked once
         return load_snapshot(self, Path(path))
 
     def _repr_png_(self) -> bytes:
