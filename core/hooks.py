@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import pluggy
 
 if TYPE_CHECKING:
+    from .formats.behaviour import Behaviour
     from .formats.recording import RecorderSpec
     from .formats.tomlsource import TomlSource
     # World (sandmod.World, which Metric names) is in a part above this one: named, not imported.
@@ -89,4 +90,27 @@ def register_metrics(register: Callable[[str, Metric], None]) -> None:
         @hookimpl
         def register_metrics(register):
             register("top", lambda world: float((world.cells != 0).any(axis=1).argmax()))
+    """
+
+
+@hookspec
+def register_behaviours(register: Callable[[str, "Behaviour"], None]) -> None:
+    """Add compiled per-cell behaviours, for what data cannot say (a vine that branches, an ant).
+
+    ``register(name, behaviour)``: ``name`` a lower-case identifier; elements name it
+    ``PLUGIN:name``, after the plugin's name (its entry point's: ``garden:grow``).
+    ``behaviour`` is a function of one :class:`sandmod.api.View` made into a
+    :class:`sandmod.api.Behaviour` by ``@sandmod.api.behaviour(args=(...))`` (a bare function
+    takes no arguments). sandmod compiles it with numba, on its own, the first time a world
+    whose elements name it steps, and calls it once a frame for each of their cells, after the
+    kernel's step, through the helpers of :mod:`sandmod.api` (``look``, ``put``, ``chance``...)::
+
+        @behaviour(args=("into", "chance"))
+        def grow(v):
+            if look(v, 0, -1) == 0 and chance(v, arg(v, 1)):
+                put(v, 0, -1, int(arg(v, 0)))
+
+        @hookimpl
+        def register_behaviours(register):
+            register("grow", grow)
     """

@@ -9,6 +9,7 @@ group. :func:`collect` calls each registering hook and returns a
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Generic, Mapping, TypeVar
@@ -17,6 +18,7 @@ import pluggy
 
 from . import hooks
 from .errors import Problem, ProblemsError
+from .formats.behaviour import NAME, Behaviour
 from .formats.recording import RecorderSpec
 from .formats.tomlsource import TomlSource
 
@@ -32,6 +34,8 @@ BUILTIN_PLUGINS = (
 )
 #: Comma-separated plugin names to leave out (built-in or installed).
 DISABLE_ENV = "SANDMOD_DISABLE_PLUGINS"
+#: A plugin name that may prefix its behaviours' names (``garden`` in ``garden:grow``).
+BEHAVIOUR_PLUGIN = re.compile(r"^[a-z][a-z0-9_.-]*$")
 
 
 @dataclass(frozen=True)
@@ -51,6 +55,8 @@ class Registry:
     mods: list[Registered[TomlSource]] = field(default_factory=list)
     recorders: dict[str, Registered[RecorderSpec]] = field(default_factory=dict)
     metrics: dict[str, Registered[hooks.Metric]] = field(default_factory=dict)
+    #: By full name, ``PLUGIN:name``.
+    behaviours: dict[str, Registered[Behaviour]] = field(default_factory=dict)
 
     def recorder_for(self, path: Path) -> RecorderSpec | None:
         """The recorder that writes files with ``path``'s extension (a folder recorder: no extension)."""
@@ -154,11 +160,30 @@ def collect(pm: pluggy.PluginManager) -> Registry:
 
         return register
 
+    def behaviour(plugin: str) -> Callable[[str, Behaviour], None]:
+        def register(name: str, function: Behaviour) -> None:
+            if callable(function) and not isinstance(function, Behaviour):
+                function = Behaviour(function)  # a bare function: no arguments
+            full = f"{plugin}:{name}"
+            if not (isinstance(name, str) and NAME.match(name) and isinstance(function, Behaviour)):
+                message = f"register(name, behaviour) needs a lower-case name and a function, got {name!r}, {function!r}"
+            elif not BEHAVIOUR_PLUGIN.match(plugin):
+                message = f"a plugin named {plugin!r} cannot name behaviours (its name must be lower-case letters, digits, '_', '-' or '.')"
+            elif full in registry.behaviours:
+                message = f"'{full}' is registered twice"
+            else:
+                registry.behaviours[full] = Registered(function, plugin)
+                return
+            problems.append(Problem(plugin, None, "register_behaviours", message))
+
+        return register
+
     each("register_mod_dirs", mod_dir)
     each("register_mod_loaders", mod_loader)
     each("register_mods", mod)
     each("register_recorders", recorder)
     each("register_metrics", metric)
+    each("register_behaviours", behaviour)
     if problems:
         raise ProblemsError(problems)
     return registry

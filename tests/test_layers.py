@@ -18,7 +18,7 @@ BELOW = {
     "hooks": {"formats", "errors"},
     "registry": {"hooks", "formats", "errors"},
     "rules": {"registry", "hooks", "formats", "engine", "errors"},
-    "passes": {"engine"},  # work on the cells after the kernel's step: the world hands it what it needs
+    "passes": {"formats", "engine", "errors"},  # work on the cells after the kernel's step: the world hands it what it needs
     "world": {"passes", "rules", "registry", "hooks", "formats", "engine", "errors"},
     "jobs": {"world", "passes", "rules", "registry", "hooks", "formats", "engine", "errors"},
     "plugins": {"api"},  # the built-in plugins import what a third party's would

@@ -207,3 +207,28 @@ def test_a_cell_word_misspelt_is_one_line(tmp_path, field, value, message):
     with pytest.raises(ProblemsError) as caught:
         load_ruleset(["base", "m"], [write_mods(tmp_path, {"m.toml": text})])
     assert message in str(caught.value)
+
+
+def test_a_particle_a_reaction_makes_carries_what_b_holds_says(tmp_path):
+    text = MEMORY + """
+[elements.sifter]
+archetype = "static"
+color = "#806040"
+tags = ["machine"]
+[[reactions]]
+a = "sifter"
+b = "water:water"
+where = ["above"]
+b_becomes = "base:particle"
+b_holds = "sand:sand"
+chance = 1
+"""
+    rules = load_ruleset(["base", "sand", "water", "mem"], [write_mods(tmp_path, {"mem.toml": text})])
+    legend = {**LEGEND, "F": "sifter"}
+    world = make_world(rules, ["...W...", ".......", "...F...", "#######"], legend)
+    i = rules.index
+    run(world, 3)
+    flying = world.cells == rules.particle
+    assert flying.sum() == 1 and world.state.carry[flying][0] == i("sand")  # the water drop turned into a grain in flight
+    run(world, 30)
+    assert world.counts().get("sand:sand") == 1 and "water:water" not in world.counts()  # landed as sand

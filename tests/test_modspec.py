@@ -51,7 +51,7 @@ def test_a_valid_mod_parses_into_its_archetype():
             '[elements.lava]\narchetype = "liquid"\ncolor = "#ff0000"\ndensity = 5\ndispersion = 1\nglow = true\n',
             "m.toml:9:1: elements.lava.glow: unknown field; allowed here: description, color, shade, tags, "
             "category, hidden, lifetime, shows_held, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
-            "explosion, explosion_resistance, breaks_into, breaks_on_impact, ignites, extinguishes, archetype, density, dispersion, viscosity, "
+            "explosion, explosion_resistance, breaks_into, breaks_on_impact, ignites, extinguishes, behaviour, behaviour_args, archetype, density, dispersion, viscosity, "
             "gravity, max_speed",
         ),
         (
@@ -68,7 +68,7 @@ def test_a_valid_mod_parses_into_its_archetype():
             '[elements.wall]\narchetype = "static"\ncolor = "#123456"\ndispersion = 3\n',
             "m.toml:7:1: elements.wall.dispersion: unknown field; allowed here: description, color, shade, tags, "
             "category, hidden, lifetime, shows_held, override, like, temperature, heat_capacity, conductivity, cooling, heated, cooled, melts, freezes, flammable, "
-            "explosion, explosion_resistance, breaks_into, breaks_on_impact, ignites, extinguishes, archetype",
+            "explosion, explosion_resistance, breaks_into, breaks_on_impact, ignites, extinguishes, behaviour, behaviour_args, archetype",
         ),
         (
             '[elements.x]\narchetype = "static"\ncolor = "#123456"\nheated = { above = 100 }\n',

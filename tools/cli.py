@@ -568,7 +568,7 @@ def _new_world_text(path: Path, mods, pour, size, mod_dirs) -> str:
     if unknown:
         found = ", ".join(sorted(modset.mods))
         raise click.BadParameter(f"no mod called {', '.join(map(repr, unknown))} was found (found: {found})", param_hint="'--mod'")
-    ruleset = compile_mods(modset.select(list(mods) or None))
+    ruleset = compile_mods(modset.select(list(mods) or None), modset.behaviours)
     if pour is None:  # a powder or liquid of the user's own mods (the one just written, say), else sand
         wanted = {m.name: m for m in ruleset.mods if not mods or m.name in mods}
         movers = [e for e in ruleset.elements if e.spec.archetype in ("powder", "liquid") and e.defined_by in wanted]

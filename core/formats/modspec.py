@@ -37,6 +37,7 @@ from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Fie
 from pydantic_core import PydanticCustomError
 
 from ..engine.layout import ARCHETYPES, MAX_SPEED, MAX_TEMPERATURE, MIN_TEMPERATURE  # noqa: F401  (taken from here too)
+from .behaviour import FULL_NAME as BEHAVIOUR_NAME
 from .validation import PATTERN_HINTS
 
 NAME = r"[a-z][a-z0-9_]*"
@@ -335,6 +336,20 @@ class _ElementBase(_Strict):
     )
     ignites: bool = Field(False, description="It lights flammable cells it touches (fire, lava).")
     extinguishes: bool = Field(False, description="It puts out burning cells it touches (water).")
+    behaviour: str | None = Field(
+        None,
+        pattern=BEHAVIOUR_NAME,
+        description="A compiled per-cell behaviour a plugin gives (its 'register_behaviours' hook), as 'PLUGIN:name': "
+        "run once a frame for each cell of the element, after the kernel's step, for what data cannot say "
+        "(a vine that branches, an ant that digs). An unknown name is a mistake that names those installed.",
+        examples=["garden:grow"],
+    )
+    behaviour_args: dict[Annotated[str, Field(pattern=rf"^{NAME}$")], float | bool | str] = Field(
+        default_factory=dict,
+        description="The behaviour's arguments, by the names its plugin declares: numbers, true or false, or "
+        "element names (each read by the behaviour as the element's id).",
+        examples=[{"into": "vine", "chance": 0.05}],
+    )
 
     @model_validator(mode="after")
     def _consistent_heat(self):
@@ -804,5 +819,6 @@ PATTERN_HINTS.update(
         f"^{SELECTOR}$": "must be an element ('water'), a tag ('#metal'), '*', or one of those after '!'",
         r"^#[0-9a-fA-F]{6}$": "must be a colour like '#c2b280'",
         f"^{TEST_NAME}$": "must be a short name like 'sinks_in_water' (lower case, digits, _ and -)",
+        BEHAVIOUR_NAME: "must be a plugin's behaviour as 'PLUGIN:name', like 'garden:grow'",
     }
 )

@@ -43,7 +43,7 @@ def _behind_mistakes(modset) -> list[Problem]:
     for salvaged in modset.salvaged:
         mod = salvaged.mod
         try:
-            compile_mods(ModSet({**modset.mods, mod.name: mod}).select(None))
+            compile_mods(ModSet({**modset.mods, mod.name: mod}).select(None), modset.behaviours)
         except ProblemsError as exc:
             found += [
                 replace(p, path=salvaged.path_in_file(p.path))
@@ -72,12 +72,12 @@ def check(
     report = Report()
     modset, report.problems = discover_mods(registry, folders, mod_files)
     try:
-        ruleset = compile_mods(modset.select(None))
+        ruleset = compile_mods(modset.select(None), modset.behaviours)
     except ProblemsError as exc:
         report.problems.extend(exc.problems)
         usable = modset.usable()
         try:  # what does not depend on a broken mod can still be checked
-            ruleset = compile_mods(modset.select(usable)) if usable and len(usable) < len(modset.mods) else None
+            ruleset = compile_mods(modset.select(usable), modset.behaviours) if usable and len(usable) < len(modset.mods) else None
         except ProblemsError as more:
             report.problems.extend(more.problems)
             ruleset = None

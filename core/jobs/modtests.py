@@ -114,7 +114,7 @@ class TestRunner:
         names = tuple(dict.fromkeys([case.mod.name, *case.spec.mods]))
         if names not in self._rulesets:
             try:
-                self._rulesets[names] = compile_mods(self.modset.select(names))
+                self._rulesets[names] = compile_mods(self.modset.select(names), self.modset.behaviours)
             except ProblemsError as exc:
                 missing = [n for n in case.spec.mods if n not in self.modset.mods]
                 if not missing:

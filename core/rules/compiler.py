@@ -14,7 +14,7 @@ megabyte. Colours are :mod:`.colours`'s.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple, Sequence
+from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 
@@ -49,6 +49,9 @@ from ..engine.layout import (  # noqa: F401  (names the other modules take from 
     TEMP_ONE,
     temperature_units,
 )
+from ..formats.behaviour import Behaviour
+from ..registry import Registered
+from .behaviours import Behaviours, compile_behaviours
 from .colours import SCORCH_DARKEN, SCORCHED_SHADES, SHADES, Looks, colour_table  # noqa: F401  (names the other modules take from here too)
 from .definitions import Definition, Override, collect_definitions, required_below, resolve_name
 from .glow import GLOW_COLOURS, GLOW_FROM, GLOW_MIX, GLOW_STEP  # noqa: F401  (names the other modules take from here too)
@@ -179,6 +182,8 @@ class Ruleset:
     warnings: tuple[Problem, ...] = ()
     #: The neighbour-count rules, compiled (None: the mods have none).
     neighbours: NeighbourTables | None = None
+    #: The plugin behaviours its elements name; None when none does (its worlds never run them).
+    behaviours: Behaviours | None = None
 
     @property
     def particle(self) -> int:
@@ -211,8 +216,9 @@ class Ruleset:
         return self._ids[found]
 
 
-def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
-    """Compile mods (in load order) into a :class:`Ruleset`; ProblemsError lists every mistake."""
+def compile_mods(mods: Sequence[LoadedMod], behaviours: Mapping[str, Registered[Behaviour]] | None = None) -> Ruleset:
+    """Compile mods (in load order) into a :class:`Ruleset`, with the plugins' ``behaviours`` (by full
+    name) for elements to name; ProblemsError lists every mistake."""
     problems: list[Problem] = []
     warnings: list[Problem] = []
     defs = collect_definitions(mods, problems, warnings)
@@ -275,6 +281,13 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     for info in elements:
         if info.spec.shows_held:
             t.remembers[info.index] = t.shows_held[info.index] = 1
+    at = lambda i: defs[elements[i].id]  # noqa: E731  (the definition in force of element i)
+    behaving = compile_behaviours(
+        elements,
+        behaviours or {},
+        lambda i: lambda field, message: problems.append(at(i).source.problem(at(i).loc + field, message)),
+        lambda i: lambda ref, *field: resolve(ref, by_mod[at(i).mod], at(i).loc + field),
+    )
     reactions, t = compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     neighbours = compile_neighbours(mods, elements, resolve)
     t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
@@ -282,7 +295,7 @@ def compile_mods(mods: Sequence[LoadedMod]) -> Ruleset:
     if problems:
         raise ProblemsError(problems)
     colours, looks = colour_table(elements, t.heat_recip)
-    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings), neighbours)
+    return Ruleset(tuple(mods), elements, reactions, t, colours, looks, ids, tuple(warnings), neighbours=neighbours, behaviours=behaving)
 
 
 def _numbered(defs: dict[str, "Definition"], order: Sequence[str]) -> tuple[ElementInfo, ...]:

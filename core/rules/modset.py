@@ -11,15 +11,16 @@ from __future__ import annotations
 import contextlib
 import copy
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Iterable, Mapping, Sequence
 
 from ..errors import Problem, ProblemsError, display_path
 from pydantic import ValidationError
 
 from ..formats.modspec import ModFile, ModInfo, version_matches
-from ..registry import Registry
+from ..formats.behaviour import Behaviour
+from ..registry import Registered, Registry
 from ..formats.tomlsource import TomlSource
 from ..formats.validation import validate
 
@@ -53,6 +54,7 @@ class ModSet:
     mods: dict[str, LoadedMod]
     broken: frozenset[str] = frozenset()  # names of mods that were found but have mistakes
     salvaged: tuple["Salvaged", ...] = ()  # those, their broken parts stood in for (see salvage): for checking only
+    behaviours: Mapping[str, Registered[Behaviour]] = field(default_factory=dict)  # the plugins', by full name
 
     def usable(self) -> list[str]:
         """The mods whose requirements, all the way down, were found without mistakes."""
@@ -223,7 +225,8 @@ def discover_mods(
     broken -= set(by_name)
     for info, source in headers:
         problems += requirement_problems(info, source, by_name, broken)
-    return ModSet(by_name, frozenset(broken), tuple(m for m in salvaged if m.mod.name in broken)), problems
+    salvaged_broken = tuple(m for m in salvaged if m.mod.name in broken)
+    return ModSet(by_name, frozenset(broken), salvaged_broken, dict(registry.behaviours)), problems
 
 
 #: What stands in for an element with mistakes while the rest of its mod is checked.

@@ -38,7 +38,8 @@ def load_ruleset(
     """Compile the named mods (all found when ``None``) from the plugins' folders and ``mod_dirs``
     (``mod_folders(mod_dirs)`` adds ``./mods``, as the command line does)."""
     registry = registry or load_registry()
-    return compile_mods(find_mods(registry, mod_dirs).select(mods))
+    modset = find_mods(registry, mod_dirs)
+    return compile_mods(modset.select(mods), modset.behaviours)
 
 
 @dataclass(frozen=True)
@@ -182,7 +183,7 @@ def world_rules(
     registry = registry or load_registry()
     modset: ModSet = find_mods(registry, world_mod_folders(spec, source, path, mod_dirs))
     selected = _select_for_world(modset, spec, source)
-    return WorldRules(registry, modset, compile_mods(change(selected) if change else selected))
+    return WorldRules(registry, modset, compile_mods(change(selected) if change else selected, modset.behaviours))
 
 
 def mod_warnings(spec: WorldFile, source: TomlSource, ruleset: Ruleset) -> list[Problem]:

@@ -108,8 +108,10 @@ def load_snapshot(world: World, path: Path) -> list[str]:
     state = world.state
     for key in State._fields:
         getattr(state, key)[...] = remap[arrays[key]] if key in ELEMENT_ARRAYS else arrays[key]
+    state.carry[world.tables.remembers[state.cells] == 0] = 0  # what cells held under rules in which they no longer can
     _keep_temperatures(state, arrays.get("heat_cap"), world.tables.heat_cap, remap, used)
     world.frame, world.seed = meta.frame, meta.seed
+    world._walker = None  # which chunks hold behaviour cells is not in a snapshot: found again from its cells
     world.wake()  # every chunk's marks start afresh: awake, and heat not known to be even
     if "awake" in arrays:
         world.awake[...] = arrays["awake"]  # the snapshot's own, so the run goes on as it would have

@@ -284,6 +284,7 @@ class World:
         self.paintings: list[Painting] = []
         self.heaters: list[Heater] = []
         self.launchers: list[Launcher] = []
+        self._walker = None  # the plugin behaviours' pass (sandmod.passes.behaviours.Walker), made on the first step that needs it
         self.paint(np.broadcast_to(True, shape), 0)  # empty, with its own shades
 
     @property
@@ -488,6 +489,7 @@ class World:
             if heater.active(self.frame):
                 self.set_temperature(heater.area(self.cells), heater.celsius)
         self._changed |= self.awake  # the kernel changes only chunks awake before it runs, or woken by it
+        before = self.awake.copy() if self.ruleset.behaviours is not None else None
         hands = self._thread_count()
         started = perf_counter()
         stepper = kernel.step_at_once if hands > 1 else kernel.step
@@ -520,8 +522,19 @@ class World:
         due = [row for frame, row in self.scheduled if frame == self.frame]
         if due:  # the world file's, in its order
             self._explode(np.array(due), 1)
+        if before is not None:
+            self._behave(before)
         self._changed |= self.awake
         self.frame += 1
+
+    def _behave(self, before: np.ndarray) -> None:
+        """Run the plugin behaviours the ruleset's elements name (``before``: the wake marks before the step)."""
+        from ..passes.behaviours import SALT_BEHAVIOUR, Walker
+
+        if self._walker is None or self._walker.table is not self.ruleset.behaviours:
+            self._walker = Walker(self.ruleset.behaviours, (self.height, self.width), self.awake.shape)
+            self._walker.hold(self.cells)
+        self._walker.run(self, before, frame_key(self.seed, self.frame, SALT_BEHAVIOUR))
 
     def _thread_count(self) -> int:
         """This frame's thread count: :attr:`threads`, or as many as pay (see :mod:`sandmod.engine.threads`);
