@@ -232,3 +232,15 @@ chance = 1
     assert flying.sum() == 1 and world.state.carry[flying][0] == i("sand")  # the water drop turned into a grain in flight
     run(world, 30)
     assert world.counts().get("sand:sand") == 1 and "water:water" not in world.counts()  # landed as sand
+
+
+def test_what_a_fluid_holds_rises_with_it_as_sand_sinks_through_it(ruleset):
+    rows = ["..SSS..", "..SSS..", "..ddd..", "..ddd..", "..ddd..", "..ddd..", "#######"]
+    world = make_world(ruleset, rows, LEGEND)
+    i = ruleset.index
+    world.state.carry[world.cells == i("dyed_water")] = i("dye")
+    assert ruleset.tables.movers_hold[0] == 1
+    run(world, 80)
+    dyed = world.cells == i("dyed_water")
+    assert dyed.sum() == 12 and (world.state.carry[dyed] == i("dye")).all()  # each drop still holds its dye
+    assert (world.state.carry[world.cells == i("sand")] == 0).all() and world.cells[5, 3] == i("sand")  # the sand sank to the floor

@@ -174,7 +174,7 @@ def slump(s, t, e, x, y, ty, side, exchange_key, knock_key, forward, x0, y0, x1,
         return way == WAIT, False, False
     marks = s.flags[_at(y, x)] & (CARRIED & ~LOOSE)
     stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(ty, qx)]), t.heat_cap[o], t.cooling[o], ambient)
-    swap(s, x, y, qx, ty, (t.remembers[e] | t.remembers[o]) != 0)
+    swap(s, x, y, qx, ty, t.movers_hold[0] != 0 and (t.remembers[e] | t.remembers[o]) != 0)
     s.vx[_at(ty, qx)] = 0
     s.vy[_at(ty, qx)] = 0
     s.flags[_at(ty, qx)] = MOVED | marks
@@ -475,12 +475,10 @@ def _shift_run(s, t, x, hole, last, g, lead, carried_vy, ambient):
     f_heat, f_cap, f_flags = int(heat[_at(hole, x)]), t.heat_cap[fluid], flags[_at(hole, x)]
     f_shade, f_timer, f_vx, f_vy = shade[_at(hole, x)], timer[_at(hole, x)], vx[_at(hole, x)], vy[_at(hole, x)]
     stir = _cooling_loss(f_heat, f_cap, t.cooling[fluid], ambient) != 0
-    holding = t.remembers[fluid]
     r = hole
     while r != last:  # each mover from the lead back a cell along g, into row r
         q = r - g
         c = cells[_at(q, x)]
-        holding |= t.remembers[c]
         h = int(heat[_at(q, x)])
         stir = stir or h * f_cap != f_heat * t.heat_cap[c] or _cooling_loss(h, t.heat_cap[c], t.cooling[c], ambient) != 0
         cells[_at(r, x)] = c
@@ -499,7 +497,7 @@ def _shift_run(s, t, x, hole, last, g, lead, carried_vy, ambient):
     vx[_at(last, x)] = f_vx
     vy[_at(last, x)] = f_vy
     flags[_at(last, x)] = MOVED | (f_flags & CARRIED)
-    if holding != 0:  # cells that hold an element take it along (rare: see Tables.remembers)
+    if t.movers_hold[0] != 0:  # cells that hold an element take it along (where a powder, liquid or gas can hold)
         _shift_held(s.carry, x, hole, last, g)
     return stir
 
@@ -663,7 +661,7 @@ def move(s, t, x, y, e, present, move_key, exchange_key, knock_key, spawn_key, f
     elif px != x or py != y:
         # Heat stays even where two cells of one temperature trade places and neither cools.
         stir = stirs(int(s.heat[_at(y, x)]), t.heat_cap[e], t.cooling[e], int(s.heat[_at(py, px)]), t.heat_cap[entered], t.cooling[entered], ambient)
-        swap(s, x, y, px, py, (t.remembers[e] | t.remembers[entered]) != 0)
+        swap(s, x, y, px, py, kind == PARTICLE or (t.movers_hold[0] != 0 and (t.remembers[e] | t.remembers[entered]) != 0))
         if (kind == GAS or g < 0) and py != y:  # a gas rose (sank), a grain rose: the cells behind it follow
             ry, followed = follow_run(s, t, x, y, g, abs(py - y) if px == x else 1, cvy, exchange_key, ambient)
             stir = stir or followed

@@ -98,6 +98,7 @@ class Tables(NamedTuple):
     react_holds_b: np.ndarray  # uint16[r]: what b holds afterwards
     react_holds: np.ndarray  # uint8[r]: 1 where the row names what a cell holds or was (into_ or holds_ from REFERS up)
     remembers: np.ndarray  # uint8[n]: a cell of it can hold an element (State.carry): particles, and those rules give one
+    movers_hold: np.ndarray  # uint8[1]: 1 where a powder, liquid or gas can hold: only then do moves but a particle's carry what cells hold
     shows_held: np.ndarray  # uint8[n]: a cell of it holding an element is drawn as that element (particles, shows_held)
     particle: np.ndarray  # uint16[1]: base:particle, what pushed cells fly as
     # Heat. A cell stores its heat energy, capacity x temperature.
@@ -291,6 +292,8 @@ def compile_mods(mods: Sequence[LoadedMod], behaviours: Mapping[str, Registered[
     reactions, t = compile_reactions(mods, elements, t, resolve, problems, warnings, below)
     neighbours = compile_neighbours(mods, elements, resolve)
     t = t._replace(particle=np.array([ids[PARTICLE_ID]], np.uint16))
+    movers = np.isin(t.archetype, [ARCHETYPE_CODES[k] for k in ("powder", "liquid", "gas")])
+    t.movers_hold[0] = (t.remembers[movers] != 0).any()
     problems.extend(_endless_phase_changes(t, elements, defs))
     if problems:
         raise ProblemsError(problems)
@@ -489,6 +492,7 @@ def _empty_tables(n: int) -> Tables:
         life_jitter=np.zeros(n, np.uint16),
         life_into=np.zeros(n, np.uint16),
         remembers=np.zeros(n, np.uint8),
+        movers_hold=np.zeros(1, np.uint8),
         shows_held=np.zeros(n, np.uint8),
         reactive=np.zeros(n, np.int64),
         displace=np.zeros((n, n), np.uint8),
