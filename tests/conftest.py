@@ -83,6 +83,42 @@ chance = 1
 SEED_ROOTS = SEED + '[[reactions]]\na = "seed"\nb = "empty"\nb_becomes = "root"\nwhere = ["below", "sides"]\nchance = 1\n'
 
 
+def packaged_files(package: Path) -> list[Path]:
+    """What setuptools puts in the wheel of the project in ``package``: each listed package's
+    modules, and its package data."""
+    import tomllib
+
+    setuptools = tomllib.loads((package / "pyproject.toml").read_text())["tool"]["setuptools"]
+    files = []
+    for name in setuptools["packages"]:
+        folder = package.joinpath(*name.split("."))
+        files += folder.glob("*.py")
+        for pattern in setuptools.get("package-data", {}).get(name, []):
+            files += folder.glob(pattern)
+    return files
+
+
+def installed_as_pip_would(package: Path, folder: Path) -> Path:
+    """The project in ``package`` installed into ``folder`` (to put on PYTHONPATH): its code and a
+    dist-info with its entry points, which is what pip would write, without the network or a build."""
+    import shutil
+    import tomllib
+
+    for source in packaged_files(package):
+        target = folder / source.relative_to(package)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(source, target)
+    project = tomllib.loads((package / "pyproject.toml").read_text())["project"]
+    info = folder / f"{project['name'].replace('-', '_')}-{project['version']}.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {project['name']}\nVersion: {project['version']}\n")
+    groups = project["entry-points"]
+    (info / "entry_points.txt").write_text(
+        "".join(f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in points.items()) for group, points in groups.items())
+    )
+    return folder
+
+
 def make_world(ruleset: Ruleset, rows: list[str], legend: dict[str, str] = LEGEND, seed: int = 0) -> World:
     """A world painted from text rows, one character per cell."""
     world = World(ruleset, len(rows[0]), len(rows), seed)

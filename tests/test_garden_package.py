@@ -7,10 +7,11 @@ import os
 import shutil
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import pytest
+
+from conftest import installed_as_pip_would
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "examples" / "garden-plugin"
@@ -18,24 +19,8 @@ PACKAGE = ROOT / "examples" / "garden-plugin"
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
-    """The package's code and a dist-info with its entry points in a fresh folder: what pip would
-    write, without the network or a build (as tests/test_plugin_package.py does)."""
-    folder = tmp_path_factory.mktemp("site")
-    config = tomllib.loads((PACKAGE / "pyproject.toml").read_text())
-    setuptools = config["tool"]["setuptools"]
-    for package in setuptools["packages"]:
-        source = PACKAGE.joinpath(*package.split("."))
-        for path in [*source.glob("*.py"), *(p for pattern in setuptools.get("package-data", {}).get(package, []) for p in source.glob(pattern))]:
-            target = folder / path.relative_to(PACKAGE)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy(path, target)
-    project = config["project"]
-    info = folder / f"sandmod_garden-{project['version']}.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {project['name']}\nVersion: {project['version']}\n")
-    points = project["entry-points"]["sandmod"]
-    (info / "entry_points.txt").write_text("[sandmod]\n" + "".join(f"{k} = {v}\n" for k, v in points.items()))
-    return folder
+    """The package installed into a fresh folder, as pip would."""
+    return installed_as_pip_would(PACKAGE, tmp_path_factory.mktemp("site"))
 
 
 def run(site: Path, *args: str, cwd: Path | None = None, **env: str) -> subprocess.CompletedProcess:

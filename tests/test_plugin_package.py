@@ -5,13 +5,13 @@ from __future__ import annotations
 import inspect
 import os
 import re
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from conftest import installed_as_pip_would
 from sandmod import hooks
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,36 +26,8 @@ print(sorted(registry.recorders), sorted(e.plugin for e in registry.mod_dirs))
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
-    """The example package installed into a fresh folder: its code and a dist-info with its entry points,
-    which is what pip would write (without needing the network or a build)."""
-    import tomllib
-
-    folder = tmp_path_factory.mktemp("site")
-    config = tomllib.loads((PACKAGE / "pyproject.toml").read_text())
-    for source in packaged_files(config["tool"]["setuptools"]):
-        target = folder / source.relative_to(PACKAGE)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy(source, target)
-    project = config["project"]
-    info = folder / f"sandmod_ascii-{project['version']}.dist-info"
-    info.mkdir()
-    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {project['name']}\nVersion: {project['version']}\n")
-    groups = project["entry-points"]
-    (info / "entry_points.txt").write_text(
-        "".join(f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in points.items()) for group, points in groups.items())
-    )
-    return folder
-
-
-def packaged_files(setuptools: dict) -> list[Path]:
-    """What setuptools puts in the wheel: each listed package's modules, and its package data."""
-    files = []
-    for package in setuptools["packages"]:
-        folder = PACKAGE.joinpath(*package.split("."))
-        files += folder.glob("*.py")
-        for pattern in setuptools.get("package-data", {}).get(package, []):
-            files += folder.glob(pattern)
-    return files
+    """The example package installed into a fresh folder, as pip would."""
+    return installed_as_pip_would(PACKAGE, tmp_path_factory.mktemp("site"))
 
 
 def test_every_folder_of_the_package_is_named_in_its_packages():
