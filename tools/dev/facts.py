@@ -1,0 +1,125 @@
+"""The figures the docs quote from the code and the bundled mods, one a line, ``name: value``,
+each written as the pages write it (``4,096``, ``3.75``): what ``figures.py --check`` reads them from.
+
+    python tools/dev/facts.py
+
+Quick (no kernel compiled or run): bundled mods are loaded, a world allocated, sweeps planned.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import tempfile
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+
+def facts() -> dict[str, object]:
+    """Each figure's name and value, read from the code at the time of asking."""
+    from packs import write_packs  # tools/dev/packs.py
+    from PIL import Image
+
+    from sandmod.engine import layout, threads
+    from sandmod.formats import behaviour, limits, sweepspec, userfiles, worldspec
+    from sandmod.jobs import benchmark, session, undo
+    from sandmod.jobs.batch import sheet
+    from sandmod.jobs.batch.plan import read_sweep
+    from sandmod.jobs.play import menu, view, window
+    from sandmod.plugins import gif
+    from sandmod.registry import collect, make_plugin_manager
+    from sandmod.rules.colours import GLOW_COLOURS, SCORCHED_SHADES, SHADES
+    from sandmod.rules.glow import GLOW_FROM
+    from sandmod.world.loading import load_ruleset
+    from sandmod.world.world import World
+
+    ruleset = load_ruleset()  # every bundled mod
+    recorder_for = collect(make_plugin_manager(entry_points=False)).recorder_for
+    spec = {e.id.split(":")[1]: e.spec for e in ruleset.elements}
+    water, steam = spec["water"], spec["steam"]
+    steam_holds = (water.heated.above * water.heat_capacity - water.heated.latent_heat) / steam.heat_capacity
+    water_holds = (steam.cooled.below * steam.heat_capacity + steam.cooled.latent_heat) / water.heat_capacity
+    packs = max(1, -(-(500 - len(ruleset.elements)) // 25))  # what `bench.py loaded --elements 500` writes
+    with tempfile.TemporaryDirectory() as folder:
+        write_packs(Path(folder), packs, 25)
+        with_packs = len(load_ruleset(None, [Path(folder)]).elements)
+    colours = SHADES + SCORCHED_SHADES + len(GLOW_COLOURS)
+    world = World(ruleset, 1024, 1024)
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    with tempfile.TemporaryDirectory() as out:
+        sweep_runs = {name: len(read_sweep(ROOT / path, Path(out) / name).runs)
+                      for name, path in (("friction", "docs/sweeps/friction.toml"), ("seeds", "examples/seeds.toml"))}
+    picture_level = tomllib.loads((ROOT / "examples" / "picture_level.toml").read_text(encoding="utf-8"))
+    level = picture_level["world"]
+    with Image.open(ROOT / "examples" / "level.png") as picture:
+        level_png = picture.size
+    timeline = tomllib.loads((ROOT / "examples" / "timeline.toml").read_text(encoding="utf-8"))["timeline"]
+    return {
+        "python_min": pyproject["requires-python"].removeprefix(">="),
+        "numba_min": next(d for d in pyproject["dependencies"] if d.startswith("numba")).split(">=")[1],
+        "max_elements": f"{layout.MAX_ELEMENTS:,}",
+        "colours_per_element": colours,
+        "colours_max": f"{colours * layout.MAX_ELEMENTS:,}",
+        "everything_elements": len(benchmark.EVERYTHING),
+        "loaded_500_packs": packs,
+        "loaded_500_elements": with_packs,
+        "bytes_per_cell": f"{benchmark.state_bytes(world) / (1024 * 1024):.2f}",
+        "chunk": layout.CHUNK,
+        "tile": layout.TILE,
+        "wake_margin": layout.WAKE_MARGIN,
+        "reach": layout.REACH,
+        "max_speed": layout.MAX_SPEED,
+        "cached_cells": f"{layout.CACHED_CELLS:,}",
+        "behaviour_reach": behaviour.REACH,
+        "glow_from": f"{GLOW_FROM:.0f}",
+        "water_heat_capacity": f"{water.heat_capacity:g}",
+        "water_boils_at": f"{water.heated.above:g}",
+        "boiling_latent_heat": f"{water.heated.latent_heat:g}",
+        "steam_heat_capacity": f"{steam.heat_capacity:g}",
+        "steam_condenses_below": f"{steam.cooled.below:g}",
+        "water_boiling_holds": f"{water.heated.above * water.heat_capacity:g}",
+        "steam_condensing_holds": f"{steam.cooled.below * steam.heat_capacity:g}",
+        "steam_born_at": f"{steam_holds:g}",
+        "water_born_at": f"{math.floor(water_holds):g}",  # the page says "≈ 97"
+        "lava_sets_below": f"{spec['lava'].cooled.below:g}",
+        "undo_depth": undo.UNDO_DEPTH,
+        "undo_mb": undo.UNDO_MEMORY // 2**20,
+        "undo_block": f"{undo.BLOCK}x{undo.BLOCK}",
+        "session_events": f"{session.MAX_EVENTS:,}",
+        "session_bytes": f"{session.MAX_RECORD_BYTES:,}",
+        "session_mb": f"{session.MAX_RECORD_BYTES / 2**20:.2f}",
+        "world_file_mb": userfiles.MAX_TEXT_BYTES // 2**20,
+        "max_frames": f"{worldspec.MAX_FRAMES:,}",
+        "play_steps_a_second": window.TICKS,
+        "play_display_fps": window.DISPLAY_FPS,
+        "play_capture_seconds": window.CAPTURE_SECONDS,
+        "play_min_width": view.MIN_WIDTH,
+        "play_menu_rows": view.ROWS,
+        "play_favourites": menu.KEYED,
+        "max_memory": f"{limits.DEFAULT_MAX_MEMORY // 2**30}G",
+        "gif_max_side": f"{gif.MAX_SIDE:,}",
+        "webp_max_side": f"{recorder_for(Path('x.webp')).max_side:,}",
+        "one_thread_below": layout.TILE * 2 * math.isqrt(threads.MIN_TILES_A_PASS),  # a pass's tiles, 2 apart
+        "sweep_max_runs": f"{sweepspec.MAX_RUNS:,}",
+        "sheet_tile": sheet.TILE,
+        "sheet_max_side": f"{sheet.MAX_SIDE:,}",
+        "friction_runs": sweep_runs["friction"],
+        "seeds_runs": sweep_runs["seeds"],
+        "level_png": f"{level_png[0]}x{level_png[1]}",
+        "level_world": f"{level['width']}x{level['height']}",
+        "level_torch": next(event["frame"] for event in picture_level["timeline"] if "heat" in event),
+        **{f"timeline_{next(k for k in event if k != 'frame')}": event["frame"] for event in timeline},
+        "timeline_heat_frames": next(event["heat"]["frames"] for event in timeline if "heat" in event),
+    }
+
+
+def main() -> None:
+    for name, value in facts().items():
+        print(f"{name}: {value}")
+
+
+if __name__ == "__main__":
+    main()

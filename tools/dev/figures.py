@@ -1,0 +1,279 @@
+"""The figures written in the prose of README.md and the docs pages, as data: for each, its page,
+the page's text that holds it, the command that makes it and how to read it from what that prints.
+
+    python tools/dev/figures.py --check             # the cheap ones made again: exit 1 where a page differs
+    python tools/dev/figures.py --measure [--write] # the measured ones, run once (many minutes), beside the pages'
+
+A cheap figure is exact and quick (a count, a limit, a figure of a bundled mod): ``--check`` runs its
+command and says where the page differs (``tests/dev/test_figures.py`` does so in plain ``pytest``).
+A measured one is a time, a speed or a ratio: the page names its command and machine, and ``--measure``
+runs it and prints what it gives now; ``--write`` puts the new value into the page where the figure is
+one number (a range, "two to three minutes", is for a person to reword). What a command prints in a
+page's output block is ``pages.py``'s; the changelog and the "what did not help" records are history.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import click
+
+ROOT = Path(__file__).resolve().parent.parent.parent
+FACTS = "python tools/dev/facts.py"
+WORDS = dict(zip("two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen".split(), range(2, 16)))
+
+
+@dataclass(frozen=True)
+class Figure:
+    page: str  # relative to the checkout
+    text: str  # the page's text that holds the figure, found there exactly once
+    figure: str  # the figure as ``text`` writes it (every time it appears in ``text``)
+    command: str  # a shell command, run in the checkout's root
+    read: str | Callable[[str], str]  # a pattern whose first group in the output is the figure, or a function of the output
+    measured: bool = False
+    digits: int | None = None  # round what is read to this many decimals
+
+    def now(self, output: str) -> str:
+        """The figure as ``output`` gives it."""
+        if callable(self.read):
+            found = self.read(output)
+        else:
+            match = re.search(self.read, output, re.M)
+            if not match:
+                raise ValueError(f"{self.command} printed nothing that {self.read!r} matches")
+            found = match.group(1)
+        return found if self.digits is None else f"{float(found):.{self.digits}f}"
+
+    def agrees(self, now: str) -> bool:
+        return self.figure == now or str(WORDS.get(self.figure)) == now
+
+
+def fact(page: str, text: str, figure: str, name: str) -> Figure:
+    """A figure that ``tools/dev/facts.py`` prints, as ``name: figure``."""
+    return Figure(page, text, figure, FACTS, rf"^{name}: (.*)$")
+
+
+def measured(page: str, text: str, figure: str, command: str, read: str | Callable[[str], str], digits: int | None = None) -> Figure:
+    return Figure(page, text, figure, command, read, measured=True, digits=digits)
+
+
+def _json(key: str, **where: object) -> str:
+    """A pattern for ``key``'s number in the JSON line (as the tools print it) whose fields are ``where``."""
+    return "^{.*?" + ".*?".join(f'"{k}": {v!r}'.replace("'", '"') for k, v in where.items()) + rf'.*?"{key}": ([\d.]+)'
+
+
+def _settled(output: str, what: str) -> str:
+    """``sandmod bench --json`` asleep, then with every chunk updated: a step's milliseconds, or their ratio."""
+    import json
+
+    asleep, awake = (json.loads(line) for line in output.splitlines() if line.startswith("{"))
+    ms = [1000 * run["seconds"] / run["steps"] for run in (asleep, awake)]
+    return {"asleep": f"{ms[0]:.3f}", "awake": f"{ms[1]:.1f}", "ratio": f"{ms[1] / ms[0]:.0f}"}[what]
+
+
+COLD = "XDG_CACHE_HOME=$(mktemp -d) /usr/bin/time -f '%e s' sandmod render examples/hourglass.toml -q -o /tmp/cold.gif"
+PYTEST = "bash -c 'SECONDS=0; python -m pytest -q {} >/dev/null 2>&1; echo took $((SECONDS / 60)) min $((SECONDS % 60)) s'"
+TURNS = "python tools/dev/bench.py in-turns --scene mix --scene halves --scene everything --threads 1 --threads 2 --json"
+SETTLED = "sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --json && sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --no-sleep --json"
+YARDSTICK = "python tools/dev/bench.py yardstick --scene mix --scene halves --threads 1 --json"
+LOADED = "python tools/dev/bench.py loaded --scene mix --scene halves --scene everything --elements 500 --threads 1 --json"
+FOREST = "sandmod play examples/forest_fire.toml --benchmark 600"
+
+
+def _speeds(page: str, rows: dict[str, tuple[str, str, str, str]], speedups: bool) -> list[Figure]:
+    """A table of in-turns speeds: for each scene, its texts holding the 1-thread and 2-thread figures (and the ratio)."""
+    found = []
+    for scene, (one_text, one, two_text, two) in rows.items():
+        found += [measured(page, one_text, one, TURNS, _json("mcell_updates_per_second", scene=scene, threads=1), 0),
+                  measured(page, two_text, two, TURNS, _json("mcell_updates_per_second", scene=scene, threads=2), 0)]
+        if speedups:
+            ratio = re.search(r"([\d.]+)x", two_text).group(1)
+            found.append(measured(page, two_text, ratio, TURNS, _json("speedup", scene=scene, threads=2), 2))
+    return found
+
+
+FIGURES: list[Figure] = [
+    # README.md
+    fact("README.md", "With Python 3.11 or newer and pip", "3.11", "python_min"),
+    Figure("README.md", "the 25 tests marked slow", "25", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
+    fact("README.md", "up to 4,096 elements", "4,096", "max_elements"),
+    measured("README.md", "kernel (51 s on two idle cores", "51", COLD, r"^([\d.]+) s$", 0),
+    measured("README.md", "This takes two to three minutes on two cores", "two to three", PYTEST.format(""), r"^took (.*)$"),
+    measured("README.md", "seven\nto nine minutes more", "seven\nto nine", PYTEST.format("-m slow"), r"^took (.*)$"),
+    *_speeds("README.md", {"mix": ("a quarter water) | 241 |", "241", "| 360 | `python tools/dev/bench.py", "360"),
+                           "halves": ("every cell full) | 152 |", "152", "| 265 | `... --scene halves", "265"),
+                           "everything": ("reactions, blasts) | 17 |", "17", "| 31 | `... --scene everything", "31")}, speedups=False),
+    measured("README.md", "| 0.032 ms a step", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
+    measured("README.md", "a step, against 7.5 (", "7.5", SETTLED, lambda out: _settled(out, "awake")),
+    measured("README.md", "(232x) |", "232", SETTLED, lambda out: _settled(out, "ratio")),
+    # docs/index.md, docs/tutorial.md, docs/troubleshooting.md
+    fact("docs/index.md", "With Python 3.11 or newer:", "3.11", "python_min"),
+    measured("docs/index.md", "kernel (51 s on two idle cores", "51", COLD, r"^([\d.]+) s$", 0),
+    fact("docs/tutorial.md", "With Python 3.11 or newer", "3.11", "python_min"),
+    measured("docs/troubleshooting.md", "(once per version, under a minute on two cores)", "under a minute", COLD, r"^([\d.]+ s)$"),
+    measured("docs/troubleshooting.md", "threads): 51 s from an empty cache", "51", COLD, r"^([\d.]+) s$", 0),
+    fact("docs/troubleshooting.md", "sandmod needs Python 3.11 or newer", "3.11", "python_min"),
+    fact("docs/troubleshooting.md", "numba 0.68 or newer", "0.68", "numba_min"),
+    fact("docs/troubleshooting.md", "(4G unless you say)", "4G", "max_memory"),
+    # docs/performance.md
+    *_speeds("docs/performance.md", {"mix": ("scattered | 241 |", "241", "| 360 | 1.50x |", "360"),
+                                     "halves": ("bottom half water | 152 |", "152", "| 265 | 1.75x |", "265"),
+                                     "everything": ("fire, blasts | 17 |", "17", "| 31 | 1.86x |", "31")}, speedups=True),
+    fact("docs/performance.md", "everything: twelve elements", "twelve", "everything_elements"),
+    measured("docs/performance.md", "mix 0.87 of it", "0.87", YARDSTICK, _json("over_yardstick", scene="mix"), 2),
+    measured("docs/performance.md", "halves 0.76.", "0.76", YARDSTICK, _json("over_yardstick", scene="halves"), 2),
+    measured("docs/performance.md", "take\n0.032 ms a step asleep", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
+    measured("docs/performance.md", "against 7.5 ms with", "7.5", SETTLED, lambda out: _settled(out, "awake")),
+    measured("docs/performance.md", "updated (232x)", "232", SETTLED, lambda out: _settled(out, "ratio")),
+    fact("docs/performance.md", "into 32x32 chunks", "32", "chunk"),
+    fact("docs/performance.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
+    fact("docs/performance.md", "48 MB for the most, 4,096", "4,096", "max_elements"),
+    fact("docs/performance.md", "with 20\n  generated packs", "20", "loaded_500_packs"),
+    fact("docs/performance.md", "(502 elements)", "502", "loaded_500_elements"),
+    measured("docs/performance.md", "mix 0.972x", "0.972", LOADED, _json("ratio", scene="mix"), 3),
+    measured("docs/performance.md", "halves 0.968x", "0.968", LOADED, _json("ratio", scene="halves"), 3),
+    measured("docs/performance.md", "everything 0.997x", "0.997", LOADED, _json("ratio", scene="everything"), 3),
+    measured("docs/performance.md", "`~/.cache/sandmod/numba`: 51", "51", COLD, r"^([\d.]+) s$", 0),
+    measured("docs/performance.md", "two runs: 51.3 and 50.9 s", "51.3 and 50.9", COLD, r"^([\d.]+) s$"),
+    # docs/architecture.md
+    fact("docs/architecture.md", "(4,096\nelements x 15 = 61,440", "4,096", "max_elements"),
+    fact("docs/architecture.md", "elements x 15 =", "15", "colours_per_element"),
+    fact("docs/architecture.md", "= 61,440 <", "61,440", "colours_max"),
+    fact("docs/architecture.md", "**chunks** of 32 x 32 cells", "32", "chunk"),
+    fact("docs/architecture.md", "`WAKE_MARGIN` = 2 cells", "2", "wake_margin"),
+    fact("docs/architecture.md", "chunks (64 x 64 cells)", "64", "tile"),
+    fact("docs/architecture.md", "smaller than 256 x 256 never does", "256", "one_thread_below"),
+    fact("docs/architecture.md", "`REACH` = 17 cells", "17", "reach"),
+    fact("docs/architecture.md", "`MAX_SPEED` = 16 cells", "16", "max_speed"),
+    fact("docs/architecture.md", "48 MB with the most, 4,096", "4,096", "max_elements"),
+    fact("docs/architecture.md", "`CACHED_CELLS` (65,536)", "65,536", "cached_cells"),
+    fact("docs/architecture.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
+    fact("docs/architecture.md", "Up to 4,096 elements load at once", "4,096", "max_elements"),
+    measured("docs/architecture.md", "`warmup.compile_new_kernels`): 51 s", "51", COLD, r"^([\d.]+) s$", 0),
+    # docs/how-to/play.md
+    fact("docs/how-to/play.md", "a GIF of the last ten seconds", "ten", "play_capture_seconds"),
+    fact("docs/how-to/play.md", "three rows of them", "three", "play_menu_rows"),
+    fact("docs/how-to/play.md", "in a 640-pixel window", "640", "play_min_width"),
+    fact("docs/how-to/play.md", "A player starts with nine favourites", "nine", "play_favourites"),
+    fact("docs/how-to/play.md", "Up to 32 steps are kept", "32", "undo_depth"),
+    fact("docs/how-to/play.md", "kept, within 512 MB", "512", "undo_mb"),
+    fact("docs/how-to/play.md", "the 64x64 blocks", "64x64", "undo_block"),
+    fact("docs/how-to/play.md", "50,000 events", "50,000", "session_events"),
+    fact("docs/how-to/play.md", "and 3.75 MB of them", "3.75", "session_mb"),
+    fact("docs/how-to/play.md", "(3,932,160 bytes", "3,932,160", "session_bytes"),
+    fact("docs/how-to/play.md", "the 4 MB a world file may take", "4", "world_file_mb"),
+    fact("docs/how-to/play.md", "and 1,000,000 frames", "1,000,000", "max_frames"),
+    fact("docs/how-to/play.md", "runs at 60 steps a second", "60", "play_steps_a_second"),
+    fact("docs/how-to/play.md", "display's 60 frames a second", "60", "play_display_fps"),
+    measured("docs/how-to/play.md", "run at several hundred frames a second", "several hundred", FOREST, r'"fps": ([\d.]+)'),
+    # docs/how-to/heat-and-fire.md, rendering.md, batch.md, plugins.md, reactions.md, worlds.md
+    fact("docs/how-to/heat-and-fire.md", "Cells hotter than 525 °C glow", "525", "glow_from"),
+    fact("docs/how-to/heat-and-fire.md", "Water at 100 °C", "100", "water_boils_at"),
+    fact("docs/how-to/heat-and-fire.md", "holds 400 (", "400", "water_boiling_holds"),
+    fact("docs/how-to/heat-and-fire.md", "its heat capacity of 4)", "4", "water_heat_capacity"),
+    fact("docs/how-to/heat-and-fire.md", "boiling takes 340", "340", "boiling_latent_heat"),
+    fact("docs/how-to/heat-and-fire.md", "capacity 0.5) is born", "0.5", "steam_heat_capacity"),
+    fact("docs/how-to/heat-and-fire.md", "= 120 °C", "120", "steam_born_at"),
+    fact("docs/how-to/heat-and-fire.md", "98 °C holds", "98", "steam_condenses_below"),
+    fact("docs/how-to/heat-and-fire.md", "holds at most 49;", "49", "steam_condensing_holds"),
+    fact("docs/how-to/heat-and-fire.md", "≈ 97 °C", "97", "water_born_at"),
+    fact("docs/how-to/rendering.md", "hotter than 525 °C (or", "525", "glow_from"),
+    fact("docs/how-to/rendering.md", "15 colours an element", "15", "colours_per_element"),
+    fact("docs/how-to/rendering.md", "61,440 for 4,096", "61,440", "colours_max"),
+    fact("docs/how-to/rendering.md", "for 4,096\nelements", "4,096", "max_elements"),
+    fact("docs/how-to/rendering.md", "65,535 pixels a side", "65,535", "gif_max_side"),
+    fact("docs/how-to/rendering.md", "WebP 16,383)", "16,383", "webp_max_side"),
+    fact("docs/how-to/batch.md", "(4G unless", "4G", "max_memory"),
+    fact("docs/how-to/batch.md", "at most 100,000 runs", "100,000", "sweep_max_runs"),
+    fact("docs/how-to/batch.md", "most 240 pixels a side", "240", "sheet_tile"),
+    fact("docs/how-to/batch.md", "the sheet 16,384", "16,384", "sheet_max_side"),
+    fact("docs/how-to/batch.md", "The 24 heaps", "24", "friction_runs"),
+    fact("docs/how-to/batch.md", "idle, 64 runs of the hourglass", "64", "seeds_runs"),
+    fact("docs/how-to/plugins.md", "up to 61,440 of them", "61,440", "colours_max"),
+    fact("docs/how-to/plugins.md", "at most `REACH` (2)", "2", "behaviour_reach"),
+    fact("docs/how-to/plugins.md", "the chunks (32 x 32", "32", "chunk"),
+    fact("docs/how-to/plugins.md", "the tiles (64 x 64)", "64", "tile"),
+    fact("docs/how-to/reactions.md", "over the 64 x 64", "64", "tile"),
+    fact("docs/how-to/worlds.md", "`examples/level.png`, 96x64 pixels", "96x64", "level_png"),
+    # docs/gallery: written from the examples' first comments by tools/dev/reference.py, which show again in the
+    # examples' files on the page: where a figure's text is in both, its entry names the example
+    *[fact(page, "level.png is 96x64 pixels", "96x64", "level_png") for page in ("examples/picture_level.toml", "docs/gallery/index.md")],
+    *[fact(page, "into a 192x128", "192x128", "level_world") for page in ("examples/picture_level.toml", "docs/gallery/index.md")],
+    fact("examples/picture_level.toml", "At frame 60 a torch", "60", "level_torch"),
+    fact("examples/lava_lake.toml", "below 900 degrees into basalt", "900", "lava_sets_below"),
+    fact("examples/timeline.toml", "starts to boil it (for 150 frames)", "150", "timeline_heat_frames"),
+    fact("docs/gallery/timeline.md", "- frame 90: a burst", "90", "timeline_spawn"),
+    fact("docs/gallery/timeline.md", "- frame 150: the tap stops", "150", "timeline_stop"),
+    fact("docs/gallery/timeline.md", "- frame 230: a blast", "230", "timeline_explode"),
+    fact("docs/gallery/timeline.md", "- frame 300: the left wall is erased", "300", "timeline_erase"),
+    fact("docs/gallery/timeline.md", "- frame 330: the tap starts again", "330", "timeline_start"),
+]
+
+
+def outputs(figures: list[Figure]) -> dict[str, str]:
+    """What each of ``figures``' commands prints (stdout and stderr), each command run once, in the checkout."""
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}"}
+    printed = {}
+    for command in dict.fromkeys(figure.command for figure in figures):
+        done = subprocess.run(command, shell=True, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        if done.returncode:
+            raise RuntimeError(f"{command} exited {done.returncode}:\n{done.stdout}")
+        printed[command] = done.stdout
+    return printed
+
+
+def missing(figures: list[Figure]) -> list[Figure]:
+    """Each of ``figures`` whose text is not on its page once (reworded, or the figure changed by hand)."""
+    return [figure for figure in figures if (ROOT / figure.page).read_text(encoding="utf-8").count(figure.text) != 1]
+
+
+def differences(figures: list[Figure]) -> list[tuple[Figure, str]]:
+    """Each of ``figures`` whose page says other than its command gives now, with what it gives."""
+    printed = outputs(figures)
+    return [(figure, now) for figure in figures if not figure.agrees(now := figure.now(printed[figure.command]))]
+
+
+def rewritten(page: str, figure: Figure, now: str) -> str:
+    """``page`` with ``figure``'s text holding ``now`` instead."""
+    return page.replace(figure.text, figure.text.replace(figure.figure, now), 1)
+
+
+def _where(figure: Figure) -> str:
+    return f"{figure.page}: {figure.text!r}"
+
+
+@click.command()
+@click.option("--check", "mode", flag_value="check", help="Make the cheap figures again (seconds); exit 1 where a page differs.")
+@click.option("--measure", "mode", flag_value="measure", help="Run the measured figures' commands once (many minutes) and print each beside the page's.")
+@click.option("--write", is_flag=True, help="With --measure: write the new figures (those that are one number) into the pages.")
+def main(mode: str | None, write: bool) -> None:
+    """The docs' prose figures, made again from their commands."""
+    if mode is None:
+        raise click.UsageError("give --check or --measure")
+    if mode == "check":
+        cheap = [figure for figure in FIGURES if not figure.measured]
+        lost, wrong = missing(FIGURES), differences(cheap)
+        for figure in lost:
+            click.echo(f"{_where(figure)} is not on the page once: change its entry in tools/dev/figures.py")
+        for figure, now in wrong:
+            click.echo(f"{_where(figure)} says {figure.figure}, the code gives {now}")
+        click.echo(f"{len(cheap)} cheap figures, {len(wrong)} differ; {len(lost)} of {len(FIGURES)} not found")
+        sys.exit(1 if wrong or lost else 0)
+    chosen = [figure for figure in FIGURES if figure.measured]
+    printed = outputs(chosen)
+    for figure in chosen:
+        now = figure.now(printed[figure.command])
+        click.echo(f"{_where(figure)}: {figure.figure} on the page, {now} now")
+        if write and re.fullmatch(r"[\d.,]+", figure.figure) and now != figure.figure:
+            page = ROOT / figure.page
+            page.write_text(rewritten(page.read_text(encoding="utf-8"), figure, now), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
