@@ -24,13 +24,14 @@ def facts() -> dict[str, object]:
     from PIL import Image
 
     from sandmod.engine import layout, threads
-    from sandmod.formats import behaviour, limits, sweepspec, userfiles, worldspec
+    from sandmod.formats import behaviour, limits, modspec, sweepspec, userfiles, worldspec
     from sandmod.jobs import benchmark, session, undo
     from sandmod.jobs.batch import sheet
     from sandmod.jobs.batch.plan import read_sweep
     from sandmod.jobs.play import menu, view, window
     from sandmod.plugins import gif
     from sandmod.registry import collect, make_plugin_manager
+    from sandmod.rules.compiler import DEFAULT_RESISTANCE
     from sandmod.rules.colours import GLOW_COLOURS, SCORCHED_SHADES, SHADES
     from sandmod.rules.glow import GLOW_FROM
     from sandmod.world.loading import load_ruleset
@@ -75,18 +76,19 @@ def facts() -> dict[str, object]:
         "cached_cells": f"{layout.CACHED_CELLS:,}",
         "behaviour_reach": behaviour.REACH,
         "glow_from": f"{GLOW_FROM:.0f}",
-        "water_heat_capacity": f"{water.heat_capacity:g}",
-        "water_boils_at": f"{water.heated.above:g}",
-        "boiling_latent_heat": f"{water.heated.latent_heat:g}",
-        "steam_heat_capacity": f"{steam.heat_capacity:g}",
-        "steam_condenses_below": f"{steam.cooled.below:g}",
-        "water_boiling_holds": f"{water.heated.above * water.heat_capacity:g}",
-        "steam_condensing_holds": f"{steam.cooled.below * steam.heat_capacity:g}",
-        "steam_born_at": f"{steam_holds:g}",
-        "water_born_at": f"{math.floor(water_holds):g}",  # the page says "≈ 97"
-        "lava_sets_below": f"{spec['lava'].cooled.below:g}",
+        "water_heat_capacity": f"{water.heat_capacity:.15g}",
+        "water_boils_at": f"{water.heated.above:.15g}",
+        "boiling_latent_heat": f"{water.heated.latent_heat:.15g}",
+        "steam_heat_capacity": f"{steam.heat_capacity:.15g}",
+        "steam_condenses_below": f"{steam.cooled.below:.15g}",
+        "water_boiling_holds": f"{water.heated.above * water.heat_capacity:.15g}",
+        "steam_condensing_holds": f"{steam.cooled.below * steam.heat_capacity:.15g}",
+        "steam_born_at": f"{steam_holds:.15g}",
+        "water_born_at": f"{math.floor(water_holds):.15g}",  # the page says "≈ 97"
+        "lava_sets_below": f"{spec['lava'].cooled.below:.15g}",
         "undo_depth": undo.UNDO_DEPTH,
         "undo_mb": undo.UNDO_MEMORY // 2**20,
+        "undo_million_cells": round(undo.UNDO_MEMORY / (sum(a.nbytes for a in world.state) / world.width / world.height) / 1e6),
         "undo_block": f"{undo.BLOCK}x{undo.BLOCK}",
         "session_events": f"{session.MAX_EVENTS:,}",
         "session_bytes": f"{session.MAX_RECORD_BYTES:,}",
@@ -99,6 +101,9 @@ def facts() -> dict[str, object]:
         "play_min_width": view.MIN_WIDTH,
         "play_menu_rows": view.ROWS,
         "play_favourites": menu.KEYED,
+        "blast_max_radius": modspec.MAX_BLAST_RADIUS,
+        **{f"resistance_{archetype}": f"{value:.15g}" for archetype, value in DEFAULT_RESISTANCE.items()},
+        "resistance_titanium": f"{spec['titanium'].explosion_resistance:.15g}",
         "max_memory": f"{limits.DEFAULT_MAX_MEMORY // 2**30}G",
         "gif_max_side": f"{gif.MAX_SIDE:,}",
         "webp_max_side": f"{recorder_for(Path('x.webp')).max_side:,}",
