@@ -164,7 +164,7 @@ FIGURES: list[Figure] = [
     fact("docs/how-to/play.md", "Up to 32 steps are kept", "32", "undo_depth"),
     fact("docs/how-to/play.md", "kept, within 512 MB", "512", "undo_mb"),
     fact("docs/how-to/play.md", "the 64x64 blocks", "64x64", "undo_block"),
-    fact("docs/how-to/play.md", "(more than about 35 million cells)", "35", "undo_million_cells"),
+    fact("docs/how-to/play.md", "(more than about 34 million cells)", "34", "undo_million_cells"),
     fact("docs/how-to/play.md", "50,000 events", "50,000", "session_events"),
     fact("docs/how-to/play.md", "and 3.75 MB of them", "3.75", "session_mb"),
     fact("docs/how-to/play.md", "(3,932,160 bytes", "3,932,160", "session_bytes"),
