@@ -9,6 +9,7 @@ Quick (no kernel compiled or run): bundled mods are loaded, a world allocated, s
 from __future__ import annotations
 
 import math
+import re
 import sys
 import tempfile
 import tomllib
@@ -58,6 +59,9 @@ def facts() -> dict[str, object]:
     with Image.open(ROOT / "examples" / "level.png") as picture:
         level_png = picture.size
     timeline = tomllib.loads((ROOT / "examples" / "timeline.toml").read_text(encoding="utf-8"))["timeline"]
+    cell_bytes = limits.WORLD_BYTES_PER_CELL + 4  # a render at scale 1 draws a 4-byte pixel a cell (`bench --memory`)
+    refusal = re.search(r"about ([\d.]+) GB of memory, ([\d.]+) GB in all: more than the limit of ([\d.]+) GB",
+                        limits.MemoryBudget().take(limits.WORLD_BYTES_PER_CELL * worldspec.MAX_SIZE**2, "a world"))
     return {
         "python_min": pyproject["requires-python"].removeprefix(">="),
         "numba_min": next(d for d in pyproject["dependencies"] if d.startswith("numba")).split(">=")[1],
@@ -104,6 +108,13 @@ def facts() -> dict[str, object]:
         "blast_max_radius": modspec.MAX_BLAST_RADIUS,
         **{f"resistance_{archetype}": f"{value:.15g}" for archetype, value in DEFAULT_RESISTANCE.items()},
         "resistance_titanium": f"{spec['titanium'].explosion_resistance:.15g}",
+        "max_size": worldspec.MAX_SIZE,
+        "estimate_8192": f"{(limits.BASELINE_BYTES + cell_bytes * 8192**2) / 2**30:.3g}",
+        "estimate_largest": f"{(limits.BASELINE_BYTES + cell_bytes * worldspec.MAX_SIZE**2) / 2**30:.3g}",
+        "largest_under_default": math.isqrt((limits.DEFAULT_MAX_MEMORY - limits.BASELINE_BYTES) // cell_bytes) // 500 * 500,
+        "refusal_world": refusal.group(1),
+        "refusal_total": refusal.group(2),
+        "refusal_limit": refusal.group(3),
         "max_memory": f"{limits.DEFAULT_MAX_MEMORY // 2**30}G",
         "gif_max_side": f"{gif.MAX_SIDE:,}",
         "webp_max_side": f"{recorder_for(Path('x.webp')).max_side:,}",

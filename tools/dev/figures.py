@@ -14,6 +14,7 @@ page's output block is ``pages.py``'s; the changelog and the "what did not help"
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -65,13 +66,12 @@ def measured(page: str, text: str, figure: str, command: str, read: str | Callab
 
 def _json(key: str, **where: object) -> str:
     """A pattern for ``key``'s number in the JSON line (as the tools print it) whose fields are ``where``."""
-    return "^{.*?" + ".*?".join(f'"{k}": {v!r}'.replace("'", '"') for k, v in where.items()) + rf'.*?"{key}": ([\d.]+)'
+    fields = ".*?".join(f'[{{ ]"{k}": {json.dumps(v)}[,}}]' for k, v in where.items())
+    return rf'^(?={{).*?{fields}.*?[{{ ]"{key}": ([\d.]+)'
 
 
 def _settled(output: str, what: str) -> str:
     """``sandmod bench --json`` asleep, then with every chunk updated: a step's milliseconds, or their ratio."""
-    import json
-
     asleep, awake = (json.loads(line) for line in output.splitlines() if line.startswith("{"))
     ms = [1000 * run["seconds"] / run["steps"] for run in (asleep, awake)]
     return {"asleep": f"{ms[0]:.3f}", "awake": f"{ms[1]:.1f}", "ratio": f"{ms[1] / ms[0]:.0f}"}[what]
@@ -84,6 +84,28 @@ SETTLED = "sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --j
 YARDSTICK = "python tools/dev/bench.py yardstick --scene mix --scene halves --threads 1 --json"
 LOADED = "python tools/dev/bench.py loaded --scene mix --scene halves --scene everything --elements 500 --threads 1 --json"
 FOREST = "sandmod play examples/forest_fire.toml --benchmark 600"
+PLAY_THREADS = "sandmod play --benchmark 600 && NUMBA_NUM_THREADS=1 sandmod play --benchmark 600"
+MEMORY = "sandmod bench --memory 8192 --memory 16384 --json"
+BATCH = ("bash -c 'for j in 1 2; do rm -rf /tmp/figures-batch; /usr/bin/time -f \"$j: %e s\" "
+         "sandmod batch examples/seeds.toml -o /tmp/figures-batch -j $j -q; done'")
+BEHAVIOURS = ("rm -rf \"$(python -c 'from sandmod.engine.kernelcache import kernel_cache_dir as d; print(d())')/behaviours\" && "
+              "/usr/bin/time -f '%e s' sandmod render examples/garden-plugin/garden.toml --frames 1 -q -o /tmp/garden.gif")  # the plugin installed
+
+
+def _fps_ratio(output: str) -> str:
+    """The frames a second of the second run over the first's."""
+    first, second = (float(fps) for fps in re.findall(r'"fps": ([\d.]+)', output))
+    return f"{second / first:.2f}"
+
+
+def _gigabytes(width: int) -> Callable[[str], str]:
+    return lambda output: f"{float(re.search(_json('peak_mb', width=width), output, re.M).group(1)) / 1024:.2f}"
+
+
+def _runs_a_minute(workers: int) -> Callable[[str], str]:
+    """``BATCH``'s 64 runs a minute on ``workers``, or (0) two workers' over one's."""
+    seconds = lambda output, j: float(re.search(rf"^{j}: ([\d.]+) s$", output, re.M).group(1))  # noqa: E731
+    return lambda output: f"{seconds(output, 1) / seconds(output, 2):.2f}" if not workers else f"{64 * 60 / seconds(output, workers):.0f}"
 
 
 def _speeds(page: str, rows: dict[str, tuple[str, str, str, str]], speedups: bool) -> list[Figure]:
@@ -131,6 +153,7 @@ FIGURES: list[Figure] = [
     measured("docs/performance.md", "take\n0.032 ms a step asleep", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
     measured("docs/performance.md", "against 7.5 ms with", "7.5", SETTLED, lambda out: _settled(out, "awake")),
     measured("docs/performance.md", "updated (232x)", "232", SETTLED, lambda out: _settled(out, "ratio")),
+    Figure("docs/performance.md", "sinks at 0.9 cell a frame", "0.9", "python tools/dev/fluids.py", r"sinks ([\d.]+) cell a frame", digits=1),
     fact("docs/performance.md", "into 32x32 chunks", "32", "chunk"),
     fact("docs/performance.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
     fact("docs/performance.md", "48 MB for the most, 4,096", "4,096", "max_elements"),
@@ -172,6 +195,7 @@ FIGURES: list[Figure] = [
     fact("docs/how-to/play.md", "and 1,000,000 frames", "1,000,000", "max_frames"),
     fact("docs/how-to/play.md", "runs at 60 steps a second", "60", "play_steps_a_second"),
     fact("docs/how-to/play.md", "display's 60 frames a second", "60", "play_display_fps"),
+    measured("docs/how-to/play.md", "it shows about two thirds as many frames", "two thirds", PLAY_THREADS, _fps_ratio),
     measured("docs/how-to/play.md", "run at several hundred frames a second", "several hundred", FOREST, r'"fps": ([\d.]+)'),
     # docs/how-to/heat-and-fire.md, rendering.md, batch.md, plugins.md, reactions.md, worlds.md
     fact("docs/how-to/heat-and-fire.md", "Cells hotter than 525 °C glow", "525", "glow_from"),
@@ -195,12 +219,26 @@ FIGURES: list[Figure] = [
     fact("docs/how-to/rendering.md", "for 4,096\nelements", "4,096", "max_elements"),
     fact("docs/how-to/rendering.md", "65,535 pixels a side", "65,535", "gif_max_side"),
     fact("docs/how-to/rendering.md", "WebP 16,383)", "16,383", "webp_max_side"),
+    fact("docs/how-to/rendering.md", "a 16384x16384 world would", "16384", "max_size"),
+    fact("docs/how-to/rendering.md", "world would take about\n  6 GB", "6", "refusal_world"),
+    fact("docs/how-to/rendering.md", "6.5 GB in all", "6.5", "refusal_total"),
+    fact("docs/how-to/rendering.md", "the limit of 4 GB", "4", "refusal_limit"),
+    fact("docs/how-to/rendering.md", "(estimated 2.25)", "2.25", "estimate_8192"),
+    fact("docs/how-to/rendering.md", "for 16384², the\nlargest", "16384", "max_size"),
+    fact("docs/how-to/rendering.md", "(estimated 7.5;", "7.5", "estimate_largest"),
+    fact("docs/how-to/rendering.md", "worlds up to about 11500² render", "11500", "largest_under_default"),
+    measured("docs/how-to/rendering.md", "1.51 GB for 8192²", "1.51", MEMORY, _gigabytes(8192)),
+    measured("docs/how-to/rendering.md", "5.87 GB for 16384²", "5.87", MEMORY, _gigabytes(16384)),
     fact("docs/how-to/batch.md", "(4G unless", "4G", "max_memory"),
     fact("docs/how-to/batch.md", "at most 100,000 runs", "100,000", "sweep_max_runs"),
     fact("docs/how-to/batch.md", "most 240 pixels a side", "240", "sheet_tile"),
     fact("docs/how-to/batch.md", "the sheet 16,384", "16,384", "sheet_max_side"),
     fact("docs/how-to/batch.md", "The 24 heaps", "24", "friction_runs"),
     fact("docs/how-to/batch.md", "idle, 64 runs of the hourglass", "64", "seeds_runs"),
+    measured("docs/how-to/batch.md", "one worker made 776 to 898 runs a minute", "776 to 898", BATCH, _runs_a_minute(1)),
+    measured("docs/how-to/batch.md", "and two 1458 to 1686", "1458 to 1686", BATCH, _runs_a_minute(2)),
+    measured("docs/how-to/batch.md", "1.75 to\n1.97 times as many", "1.75 to\n1.97", BATCH, _runs_a_minute(0)),
+    measured("docs/how-to/plugins.md", "steps: 3 to 5 seconds on two busy cores", "3 to 5", BEHAVIOURS, r"^([\d.]+) s$"),
     fact("docs/how-to/plugins.md", "up to 61,440 of them", "61,440", "colours_max"),
     fact("docs/how-to/plugins.md", "at most `REACH` (2)", "2", "behaviour_reach"),
     fact("docs/how-to/plugins.md", "the chunks (32 x 32", "32", "chunk"),
