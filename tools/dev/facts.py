@@ -50,6 +50,11 @@ def facts() -> dict[str, object]:
         with_packs = len(load_ruleset(None, [Path(folder)]).elements)
     colours = SHADES + SCORCHED_SHADES + len(GLOW_COLOURS)
     world = World(ruleset, 1024, 1024)
+    chunks, tiles = (1024 // layout.CHUNK) ** 2, (1024 // layout.TILE) ** 2
+    whole = lambda a: a if a.base is None else a.base  # noqa: E731 (as benchmark.state_bytes counts them)
+    per_chunk = sum(whole(a).nbytes for a in (world.awake, world._woken, world._even, world._stirred)) // chunks
+    per_tile = sum(a.nbytes for a in (world._detonations, world._fast_gain, world._seen)) // tiles
+    render = worldspec.RenderSettings()
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
     with tempfile.TemporaryDirectory() as out:
         sweep_runs = {name: len(read_sweep(ROOT / path, Path(out) / name).runs)
@@ -71,6 +76,9 @@ def facts() -> dict[str, object]:
         "everything_elements": len(benchmark.EVERYTHING),
         "loaded_500_packs": packs,
         "loaded_500_elements": with_packs,
+        "cell_bytes": sum(a.nbytes for a in world.state) // (1024 * 1024),
+        "chunk_bytes": per_chunk,
+        "tile_words": per_tile // 8,
         "bytes_per_cell": f"{benchmark.state_bytes(world) / (1024 * 1024):.2f}",
         "chunk": layout.CHUNK,
         "tile": layout.TILE,
@@ -115,6 +123,7 @@ def facts() -> dict[str, object]:
         "refusal_world": refusal.group(1),
         "refusal_total": refusal.group(2),
         "refusal_limit": refusal.group(3),
+        **{f"render_{key}": f"{getattr(render, key):.15g}" for key in ("frames", "every", "fps", "scale", "loop")},
         "max_memory": f"{limits.DEFAULT_MAX_MEMORY // 2**30}G",
         "gif_max_side": f"{gif.MAX_SIDE:,}",
         "webp_max_side": f"{recorder_for(Path('x.webp')).max_side:,}",

@@ -27,7 +27,7 @@ import click
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 FACTS = "python tools/dev/facts.py"
-WORDS = dict(zip("two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen".split(), range(2, 16)))
+WORDS = dict(zip("one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen".split(), range(1, 16)))
 
 
 @dataclass(frozen=True)
@@ -83,6 +83,7 @@ TURNS = "python tools/dev/bench.py in-turns --scene mix --scene halves --scene e
 SETTLED = "sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --json && sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --no-sleep --json"
 YARDSTICK = "python tools/dev/bench.py yardstick --scene mix --scene halves --threads 1 --json"
 LOADED = "python tools/dev/bench.py loaded --scene mix --scene halves --scene everything --elements 500 --threads 1 --json"
+README_PYTHON = """python -c 'import re; exec(re.search(r"\\x60{3}python\\n(import sandmod.*?)\\x60{3}", open("README.md").read(), re.S).group(1))'"""
 FOREST = "sandmod play examples/forest_fire.toml --benchmark 600"
 PLAY_THREADS = "sandmod play --benchmark 600 && NUMBA_NUM_THREADS=1 sandmod play --benchmark 600"
 MEMORY = "sandmod bench --memory 8192 --memory 16384 --json"
@@ -125,6 +126,8 @@ FIGURES: list[Figure] = [
     fact("README.md", "With Python 3.11 or newer and pip", "3.11", "python_min"),
     Figure("README.md", "the 25 tests marked slow", "25", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
     fact("README.md", "up to 4,096 elements", "4,096", "max_elements"),
+    Figure("README.md", "# {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}",
+           "{'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}", README_PYTHON, r"^(\{.*\})$"),
     measured("README.md", "kernel (51 s on two idle cores", "51", COLD, r"^([\d.]+) s$", 0),
     measured("README.md", "This takes two to three minutes on two cores", "two to three", PYTEST.format(""), r"^took (.*)$"),
     measured("README.md", "seven\nto nine minutes more", "seven\nto nine", PYTEST.format("-m slow"), r"^took (.*)$"),
@@ -155,6 +158,7 @@ FIGURES: list[Figure] = [
     measured("docs/performance.md", "updated (232x)", "232", SETTLED, lambda out: _settled(out, "ratio")),
     Figure("docs/performance.md", "sinks at 0.9 cell a frame", "0.9", "python tools/dev/fluids.py", r"sinks ([\d.]+) cell a frame", digits=1),
     fact("docs/performance.md", "into 32x32 chunks", "32", "chunk"),
+    fact("docs/performance.md", "**Memory.** 16 bytes a cell", "16", "cell_bytes"),
     fact("docs/performance.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
     fact("docs/performance.md", "48 MB for the most, 4,096", "4,096", "max_elements"),
     fact("docs/performance.md", "with 19\n  generated packs", "19", "loaded_500_packs"),
@@ -176,6 +180,9 @@ FIGURES: list[Figure] = [
     fact("docs/architecture.md", "`MAX_SPEED` = 16 cells", "16", "max_speed"),
     fact("docs/architecture.md", "48 MB with the most, 4,096", "4,096", "max_elements"),
     fact("docs/architecture.md", "`CACHED_CELLS` (65,536)", "65,536", "cached_cells"),
+    fact("docs/architecture.md", "(int32): 16 bytes a cell", "16", "cell_bytes"),
+    fact("docs/architecture.md", "Per chunk, 131 bytes", "131", "chunk_bytes"),
+    fact("docs/architecture.md", "per tile an 8-byte count of detonations", "an", "tile_words"),
     fact("docs/architecture.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
     fact("docs/architecture.md", "Up to 4,096 elements load at once", "4,096", "max_elements"),
     measured("docs/architecture.md", "`warmup.compile_new_kernels`): 51 s", "51", COLD, r"^([\d.]+) s$", 0),
@@ -219,6 +226,11 @@ FIGURES: list[Figure] = [
     fact("docs/how-to/rendering.md", "for 4,096\nelements", "4,096", "max_elements"),
     fact("docs/how-to/rendering.md", "65,535 pixels a side", "65,535", "gif_max_side"),
     fact("docs/how-to/rendering.md", "WebP 16,383)", "16,383", "webp_max_side"),
+    fact("docs/how-to/rendering.md", "frames to simulate (300)", "300", "render_frames"),
+    fact("docs/how-to/rendering.md", "frames simulated per image written (2)", "2", "render_every"),
+    fact("docs/how-to/rendering.md", "images per second when played (25)", "25", "render_fps"),
+    fact("docs/how-to/rendering.md", "pixels per cell (3)", "3", "render_scale"),
+    fact("docs/how-to/rendering.md", "0 (the default) forever", "0", "render_loop"),
     fact("docs/how-to/rendering.md", "a 16384x16384 world would", "16384", "max_size"),
     fact("docs/how-to/rendering.md", "world would take about\n  6 GB", "6", "refusal_world"),
     fact("docs/how-to/rendering.md", "6.5 GB in all", "6.5", "refusal_total"),
