@@ -182,7 +182,7 @@ FIGURES: list[Figure] = [
     fact("docs/architecture.md", "`CACHED_CELLS` (65,536)", "65,536", "cached_cells"),
     fact("docs/architecture.md", "(int32): 16 bytes a cell", "16", "cell_bytes"),
     fact("docs/architecture.md", "Per chunk, 131 bytes", "131", "chunk_bytes"),
-    fact("docs/architecture.md", "per tile an 8-byte count of detonations", "an", "tile_words"),
+    fact("docs/architecture.md", "per tile three 8-byte words", "three", "tile_words"),
     fact("docs/architecture.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
     fact("docs/architecture.md", "Up to 4,096 elements load at once", "4,096", "max_elements"),
     measured("docs/architecture.md", "`warmup.compile_new_kernels`): 51 s", "51", COLD, r"^([\d.]+) s$", 0),
