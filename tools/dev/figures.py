@@ -83,6 +83,7 @@ TURNS = "python tools/dev/bench.py in-turns --scene mix --scene halves --scene e
 SETTLED = "sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --json && sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --no-sleep --json"
 YARDSTICK = "python tools/dev/bench.py yardstick --scene mix --scene halves --threads 1 --json"
 LOADED = "python tools/dev/bench.py loaded --scene mix --scene halves --scene everything --elements 500 --threads 1 --json"
+FLUIDS = "python tools/dev/fluids.py"  # seconds of runs of the engine: its test is marked slow
 README_PYTHON = """python -c 'import re; exec(re.search(r"\\x60{3}python\\n(import sandmod.*?)\\x60{3}", open("README.md").read(), re.S).group(1))'"""
 FOREST = "sandmod play examples/forest_fire.toml --benchmark 600"
 PLAY_THREADS = "sandmod play --benchmark 600 && NUMBA_NUM_THREADS=1 sandmod play --benchmark 600"
@@ -124,7 +125,7 @@ def _speeds(page: str, rows: dict[str, tuple[str, str, str, str]], speedups: boo
 FIGURES: list[Figure] = [
     # README.md
     fact("README.md", "With Python 3.11 or newer and pip", "3.11", "python_min"),
-    Figure("README.md", "the 25 tests marked slow", "25", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
+    Figure("README.md", "the 26 tests marked slow", "26", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
     fact("README.md", "up to 4,096 elements", "4,096", "max_elements"),
     Figure("README.md", "# {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}",
            "{'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}", README_PYTHON, r"^(\{.*\})$"),
@@ -156,7 +157,7 @@ FIGURES: list[Figure] = [
     measured("docs/performance.md", "take\n0.032 ms a step asleep", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
     measured("docs/performance.md", "against 7.5 ms with", "7.5", SETTLED, lambda out: _settled(out, "awake")),
     measured("docs/performance.md", "updated (232x)", "232", SETTLED, lambda out: _settled(out, "ratio")),
-    Figure("docs/performance.md", "sinks at 0.9 cell a frame", "0.9", "python tools/dev/fluids.py", r"sinks ([\d.]+) cell a frame", digits=1),
+    Figure("docs/performance.md", "sinks at 0.9 cell a frame", "0.9", FLUIDS, r"sinks ([\d.]+) cell a frame", digits=1),
     fact("docs/performance.md", "into 32x32 chunks", "32", "chunk"),
     fact("docs/performance.md", "**Memory.** 16 bytes a cell", "16", "cell_bytes"),
     fact("docs/performance.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
