@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from figures import FIGURES, FLUIDS, Figure, _json, _settled, differences, missing, rewritten
+from figures import FIGURES, FLUIDS, ROOT, Figure, _json, _settled, differences, missing, rewritten
 
 CHEAP = [figure for figure in FIGURES if not figure.measured]
 
@@ -25,6 +25,15 @@ def test_every_figures_text_is_on_its_page_once_and_holds_the_figure():
 def _agree(figures: list[Figure]) -> None:
     wrong = differences(figures)
     assert wrong == [], "\n".join(f"{f.page}: {f.text!r} says {f.figure}, the code gives {now}" for f, now in wrong)
+
+
+def test_a_measured_figures_text_shares_no_character_with_another_entrys():
+    """So that ``--write``, changing one, leaves the others' texts as they are."""
+    spans = {figure: ((start := (ROOT / figure.page).read_text(encoding="utf-8").find(figure.text)), start + len(figure.text)) for figure in FIGURES}
+    for figure in (f for f in FIGURES if f.measured):
+        (start, end) = spans[figure]
+        overlapping = [other for other in FIGURES if other.page == figure.page and other != figure and spans[other][0] < end and start < spans[other][1]]
+        assert overlapping == [], (figure, overlapping)
 
 
 def test_the_cheap_figures_are_what_the_code_gives_now():
