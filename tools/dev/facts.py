@@ -8,6 +8,7 @@ Quick (no kernel compiled or run): bundled mods are loaded, a world allocated, s
 
 from __future__ import annotations
 
+import inspect
 import math
 import re
 import sys
@@ -21,6 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 def facts() -> dict[str, object]:
     """Each figure's name and value, read from the code at the time of asking."""
+    import kernels  # tools/dev/kernels.py
+    import numpy as np
     from packs import write_packs  # tools/dev/packs.py
     from PIL import Image
 
@@ -32,6 +35,8 @@ def facts() -> dict[str, object]:
     from sandmod.jobs.play import menu, view, window
     from sandmod.plugins import gif
     from sandmod.registry import collect, make_plugin_manager
+    from sandmod.engine import kernel as kernel_constants
+    from sandmod.rules import compiler
     from sandmod.rules.compiler import DEFAULT_RESISTANCE
     from sandmod.rules.colours import GLOW_COLOURS, SCORCHED_SHADES, SHADES
     from sandmod.rules.glow import GLOW_FROM
@@ -55,6 +60,10 @@ def facts() -> dict[str, object]:
     per_chunk = sum(whole(a).nbytes for a in (world.awake, world._woken, world._even, world._stirred)) // chunks
     per_tile = sum(a.nbytes for a in (world._detonations, world._fast_gain, world._seen)) // tiles
     render = worldspec.RenderSettings()
+    tables, n = ruleset.tables, len(ruleset.elements)
+    pair_tables = [a for a in tables._asdict().values() if isinstance(a, np.ndarray) and a.shape[:2] == (n, n)]
+    density = {name: getattr(s, "density", None) for name, s in spec.items()}
+    segment = inspect.signature(kernels.compare_worlds).parameters
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
     with tempfile.TemporaryDirectory() as out:
         sweep_runs = {name: len(read_sweep(ROOT / path, Path(out) / name).runs)
@@ -79,6 +88,7 @@ def facts() -> dict[str, object]:
         "cell_bytes": sum(a.nbytes for a in world.state) // (1024 * 1024),
         "chunk_bytes": per_chunk,
         "tile_words": per_tile // 8,
+        "pair_bytes": sum(a.nbytes for a in pair_tables) // n**2,
         "bytes_per_cell": f"{benchmark.state_bytes(world) / (1024 * 1024):.2f}",
         "chunk": layout.CHUNK,
         "tile": layout.TILE,
@@ -86,6 +96,22 @@ def facts() -> dict[str, object]:
         "reach": layout.REACH,
         "max_speed": layout.MAX_SPEED,
         "cached_cells": f"{layout.CACHED_CELLS:,}",
+        "plume_columns": layout.PLUME,
+        "plume_rows": layout.PLUME_RUN,
+        "mask_bits": tables.reactive.dtype.itemsize * 8,
+        "own_mask_bits": layout.UNIQUE_BITS,
+        "last_own_bit": layout.UNIQUE_BITS - 1,
+        "eagerness": f"{compiler.EAGERNESS:.15g}",
+        "into_air": f"{compiler.INTO_AIR[0]:.15g}",
+        "exchange_most": f"{compiler.SURE_ENOUGH / compiler.ALWAYS:.2f}",
+        "sand_into_water": f"{compiler.exchange_chance(density['sand'], density['water'], 1) / compiler.ALWAYS:.2f}",
+        "water_into_oil": f"{compiler.exchange_chance(density['water'], density['oil'], 1) / compiler.ALWAYS:.2f}",
+        "handed_on_cost": kernel_constants.HANDED_ON_COST,
+        "fast_trial": kernel_constants.FAST_TRIAL,
+        "turns_segment": segment["segment"].default,
+        "turns_repeats": segment["repeats"].default,
+        "apng_declared": recorder_for(Path("x.apng")).kept_bytes_per_pixel,
+        "webp_declared": recorder_for(Path("x.webp")).kept_bytes_per_pixel,
         "behaviour_reach": behaviour.REACH,
         "glow_from": f"{GLOW_FROM:.0f}",
         "water_heat_capacity": f"{water.heat_capacity:.15g}",
@@ -124,6 +150,9 @@ def facts() -> dict[str, object]:
         "refusal_total": refusal.group(2),
         "refusal_limit": refusal.group(3),
         **{f"render_{key}": f"{getattr(render, key):.15g}" for key in ("frames", "every", "fps", "scale", "loop")},
+        "baseline_gb": f"{limits.BASELINE_BYTES / 2**30:.15g}",
+        "heat_event_frames": worldspec._Heating.model_fields["frames"].default,
+        "cooling_most": f"{_most(modspec._ElementBase.model_fields['cooling']):.15g}",
         "max_memory": f"{limits.DEFAULT_MAX_MEMORY // 2**30}G",
         "gif_max_side": f"{gif.MAX_SIDE:,}",
         "webp_max_side": f"{recorder_for(Path('x.webp')).max_side:,}",
@@ -139,6 +168,11 @@ def facts() -> dict[str, object]:
         **{f"timeline_{next(k for k in event if k != 'frame')}": event["frame"] for event in timeline},
         "timeline_heat_frames": next(event["heat"]["frames"] for event in timeline if "heat" in event),
     }
+
+
+def _most(field) -> float:
+    """A pydantic field's upper bound."""
+    return next(rule.le for rule in field.metadata if getattr(rule, "le", None) is not None)
 
 
 def main() -> None:
