@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 def facts() -> dict[str, object]:
     """Each figure's name and value, read from the code at the time of asking."""
+    import bench  # tools/dev/bench.py
     import kernels  # tools/dev/kernels.py
     import numpy as np
     from packs import write_packs  # tools/dev/packs.py
@@ -63,6 +64,7 @@ def facts() -> dict[str, object]:
     tables, n = ruleset.tables, len(ruleset.elements)
     pair_tables = [a for a in tables._asdict().values() if isinstance(a, np.ndarray) and a.shape[:2] == (n, n)]
     density = {name: getattr(s, "density", None) for name, s in spec.items()}
+    bench_size = next(option.default for option in bench.in_turns.params if option.name == "size")
     segment = inspect.signature(kernels.compare_worlds).parameters
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
     with tempfile.TemporaryDirectory() as out:
@@ -82,6 +84,8 @@ def facts() -> dict[str, object]:
         "max_elements": f"{layout.MAX_ELEMENTS:,}",
         "colours_per_element": colours,
         "colours_max": f"{colours * layout.MAX_ELEMENTS:,}",
+        "bench_size": bench_size,
+        "bench_steps": benchmark.scene_bench(ruleset, "mix", bench_size).steps,
         "everything_elements": len(benchmark.EVERYTHING),
         "loaded_500_packs": packs,
         "loaded_500_elements": with_packs,

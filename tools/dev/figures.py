@@ -85,6 +85,7 @@ YARDSTICK = "python tools/dev/bench.py yardstick --scene mix --scene halves --th
 LOADED = "python tools/dev/bench.py loaded --scene mix --scene halves --scene everything --elements 500 --threads 1 --json"
 FLUIDS = "python tools/dev/fluids.py"  # seconds of runs of the engine: its test is marked slow
 README_PYTHON = """python -c 'import re; exec(re.search(r"\\x60{3}python\\n(import sandmod.*?)\\x60{3}", open("README.md").read(), re.S).group(1))'"""
+PLAY_ONE = "sandmod play --benchmark 1"
 FOREST = "sandmod play examples/forest_fire.toml --benchmark 600"
 PLAY_THREADS = "sandmod play --benchmark 600 && NUMBA_NUM_THREADS=1 sandmod play --benchmark 600"
 MEMORY = "sandmod bench --memory 8192 --memory 16384 --json"
@@ -126,6 +127,8 @@ FIGURES: list[Figure] = [
     fact("README.md", "With Python 3.11 or newer and pip", "3.11", "python_min"),
     Figure("README.md", "the 26 tests marked slow", "26", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
     fact("README.md", "up to 4,096 elements", "4,096", "max_elements"),
+    fact("README.md", "(512², 1000 steps", "512", "bench_size"),
+    fact("README.md", "(512², 1000 steps", "1000", "bench_steps"),
     Figure("README.md", "# {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}",
            "{'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}", README_PYTHON, r"^(\{.*\})$"),
     measured("README.md", "kernel (51 s on two idle cores", "51", COLD, r"^([\d.]+) s$", 0),
@@ -151,6 +154,8 @@ FIGURES: list[Figure] = [
                                      "halves": ("bottom half water | 152", "152", "| 265", "265", "| 1.75x |", "1.75"),
                                      "everything": ("fire, blasts | 17", "17", "| 31", "31", "| 1.86x |", "1.86")}),
     fact("docs/performance.md", "everything: twelve elements", "twelve", "everything_elements"),
+    fact("docs/performance.md", "minutes: 512², 1000 steps", "512", "bench_size"),
+    fact("docs/performance.md", "minutes: 512², 1000 steps", "1000", "bench_steps"),
     measured("docs/performance.md", "mix 0.87 of it", "0.87", YARDSTICK, _json("over_yardstick", scene="mix"), 2),
     measured("docs/performance.md", "halves 0.76.", "0.76", YARDSTICK, _json("over_yardstick", scene="halves"), 2),
     measured("docs/performance.md", "take\n0.032 ms a step asleep", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
@@ -232,6 +237,9 @@ FIGURES: list[Figure] = [
     fact("docs/how-to/play.md", "and 1,000,000 frames", "1,000,000", "max_frames"),
     fact("docs/how-to/play.md", "runs at 60 steps a second", "60", "play_steps_a_second"),
     fact("docs/how-to/play.md", "display's 60 frames a second", "60", "play_display_fps"),
+    Figure("docs/how-to/play.md", "on a new 512x384 world", "512x384", PLAY_ONE,
+           lambda output: "{width}x{height}".format(**json.loads(output.splitlines()[-1]))),
+    Figure("docs/how-to/play.md", "blasts) at scale 2", "2", PLAY_ONE, r'"scale": (\d+)'),
     measured("docs/how-to/play.md", "it shows about two thirds as many frames", "two thirds", PLAY_THREADS, _fps_ratio),
     measured("docs/how-to/play.md", "run at several hundred frames a second", "several hundred", FOREST, r'"fps": ([\d.]+)'),
     # docs/how-to/heat-and-fire.md, rendering.md, batch.md, plugins.md, reactions.md, worlds.md
