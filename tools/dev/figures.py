@@ -2,7 +2,7 @@
 the page's text that holds it, the command that makes it and how to read it from what that prints.
 
     python tools/dev/figures.py --check             # the cheap ones made again: exit 1 where a page differs
-    python tools/dev/figures.py --measure [--write] # the measured ones, run once (many minutes), beside the pages'
+    python tools/dev/figures.py --measure [--only TEXT] [--write]  # the measured ones, run once, beside the pages'
 
 A cheap figure is exact and quick (a count, a limit, a figure of a bundled mod): ``--check`` runs its
 command and says where the page differs (``tests/dev/test_figures.py`` does so in plain ``pytest``).
@@ -92,7 +92,7 @@ MEMORY = "sandmod bench --memory 8192 --memory 16384 --json"
 BATCH = ("bash -c 'for j in 1 2; do rm -rf /tmp/figures-batch; /usr/bin/time -f \"$j: %e s\" "
          "sandmod batch examples/seeds.toml -o /tmp/figures-batch -j $j -q; done'")
 BEHAVIOURS = ("rm -rf \"$(python -c 'from sandmod.engine.kernelcache import kernel_cache_dir as d; print(d())')/behaviours\" && "
-              "/usr/bin/time -f '%e s' sandmod render examples/garden-plugin/garden.toml --frames 1 -q -o /tmp/garden.gif")  # the plugin installed
+              "/usr/bin/time -f '%e s' sandmod render examples/garden-plugin/garden.toml --frames 1 -q -o /tmp/garden.gif")  # pip install ./examples/garden-plugin first; it empties the behaviours' cache
 
 
 def _fps_ratio(output: str) -> str:
@@ -349,34 +349,52 @@ def _where(figure: Figure) -> str:
     return f"{figure.page}: {figure.text!r}"
 
 
+def check() -> int:
+    """Make the cheap figures again and say which differ, or are lost; 1 if any."""
+    cheap = [figure for figure in FIGURES if not figure.measured]
+    lost, wrong = missing(FIGURES), differences(cheap)
+    for figure in lost:
+        click.echo(f"{_where(figure)} is not on the page once: change its entry in tools/dev/figures.py")
+    for figure, now in wrong:
+        click.echo(f"{_where(figure)} says {figure.figure}, the code gives {now}")
+    click.echo(f"{len(cheap)} cheap figures, {len(wrong)} differ; {len(lost)} of {len(FIGURES)} not found")
+    return 1 if wrong or lost else 0
+
+
+def measure(only: str, write: bool) -> int:
+    """Run the measured figures' commands (those whose page or command holds ``only``) one at a time and
+    print each figure beside the page's; ``write`` the new ones that are one number. 1 if a command failed."""
+    status = 0
+    chosen = [figure for figure in FIGURES if figure.measured and (only in figure.page or only in figure.command)]
+    for command in dict.fromkeys(figure.command for figure in chosen):
+        try:
+            printed = outputs([Figure("", "", "", command, "")])[command]
+        except RuntimeError as failed:
+            click.echo(f"failed, its figures left as they are: {str(failed)[:500]}", err=True)
+            status = 1
+            continue
+        for figure in (f for f in chosen if f.command == command):
+            now = figure.now(printed)
+            click.echo(f"{_where(figure)}: {figure.figure} on the page, {now} now")
+            if write and re.fullmatch(r"[\d.,]+", figure.figure) and now != figure.figure:
+                page = ROOT / figure.page
+                try:
+                    page.write_text(rewritten(page.read_text(encoding="utf-8"), figure, now), encoding="utf-8")
+                except ValueError as lost:
+                    click.echo(f"not written: {lost}", err=True)
+    return status
+
+
 @click.command()
 @click.option("--check", "mode", flag_value="check", help="Make the cheap figures again (seconds); exit 1 where a page differs.")
-@click.option("--measure", "mode", flag_value="measure", help="Run the measured figures' commands once (many minutes) and print each beside the page's.")
+@click.option("--measure", "mode", flag_value="measure", help="Run the measured figures' commands once (the better part of an hour) and print each beside the page's.")
+@click.option("--only", default="", metavar="TEXT", help="With --measure: only the figures whose page or command holds TEXT (`performance.md`, `bench.py`).")
 @click.option("--write", is_flag=True, help="With --measure: write the new figures (those that are one number) into the pages.")
-def main(mode: str | None, write: bool) -> None:
+def main(mode: str | None, only: str, write: bool) -> None:
     """The docs' prose figures, made again from their commands."""
     if mode is None:
         raise click.UsageError("give --check or --measure")
-    if mode == "check":
-        cheap = [figure for figure in FIGURES if not figure.measured]
-        lost, wrong = missing(FIGURES), differences(cheap)
-        for figure in lost:
-            click.echo(f"{_where(figure)} is not on the page once: change its entry in tools/dev/figures.py")
-        for figure, now in wrong:
-            click.echo(f"{_where(figure)} says {figure.figure}, the code gives {now}")
-        click.echo(f"{len(cheap)} cheap figures, {len(wrong)} differ; {len(lost)} of {len(FIGURES)} not found")
-        sys.exit(1 if wrong or lost else 0)
-    chosen = [figure for figure in FIGURES if figure.measured]
-    printed = outputs(chosen)
-    for figure in chosen:
-        now = figure.now(printed[figure.command])
-        click.echo(f"{_where(figure)}: {figure.figure} on the page, {now} now")
-        if write and re.fullmatch(r"[\d.,]+", figure.figure) and now != figure.figure:
-            page = ROOT / figure.page
-            try:
-                page.write_text(rewritten(page.read_text(encoding="utf-8"), figure, now), encoding="utf-8")
-            except ValueError as lost:
-                click.echo(f"not written: {lost}", err=True)
+    sys.exit(check() if mode == "check" else measure(only, write))
 
 
 if __name__ == "__main__":
