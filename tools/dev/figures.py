@@ -91,8 +91,9 @@ PLAY_THREADS = "sandmod play --benchmark 600 && NUMBA_NUM_THREADS=1 sandmod play
 MEMORY = "sandmod bench --memory 8192 --memory 16384 --json"
 BATCH = ("bash -c 'for j in 1 2; do rm -rf /tmp/figures-batch; /usr/bin/time -f \"$j: %e s\" "
          "sandmod batch examples/seeds.toml -o /tmp/figures-batch -j $j -q; done'")
+# with the garden plugin installed (pip install ./examples/garden-plugin); it empties the behaviours' cache
 BEHAVIOURS = ("rm -rf \"$(python -c 'from sandmod.engine.kernelcache import kernel_cache_dir as d; print(d())')/behaviours\" && "
-              "/usr/bin/time -f '%e s' sandmod render examples/garden-plugin/garden.toml --frames 1 -q -o /tmp/garden.gif")  # pip install ./examples/garden-plugin first; it empties the behaviours' cache
+              "/usr/bin/time -f '%e s' sandmod render examples/garden-plugin/garden.toml --frames 1 -q -o /tmp/garden.gif")
 
 
 def _fps_ratio(output: str) -> str:
