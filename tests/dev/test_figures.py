@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from figures import FIGURES, FLUIDS, ROOT, Figure, _json, _settled, differences, missing, rewritten
+from figures import FIGURES, ROOT, SLOW, Figure, _json, _settled, differences, missing, rewritten
 
 CHEAP = [figure for figure in FIGURES if not figure.measured]
 
@@ -38,12 +38,12 @@ def test_a_measured_figures_text_shares_no_character_with_another_entrys():
 
 def test_the_cheap_figures_are_what_the_code_gives_now():
     """What ``python tools/dev/figures.py --check`` checks: counts, limits, the bundled mods' figures (5 s)."""
-    _agree([figure for figure in CHEAP if figure.command != FLUIDS])
+    _agree([figure for figure in CHEAP if figure.command not in SLOW])
 
 
-@pytest.mark.slow  # runs the engine's fluid scenes
-def test_the_cheap_figures_of_fluids_py_are_what_it_prints_now():
-    _agree([figure for figure in CHEAP if figure.command == FLUIDS])
+@pytest.mark.slow  # runs the engine for seconds: fluids.py's scenes, the halves scene
+def test_the_cheap_figures_that_run_the_engine_are_what_it_gives_now():
+    _agree([figure for figure in CHEAP if figure.command in SLOW])
 
 
 def test_a_figure_that_differs_is_found():

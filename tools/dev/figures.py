@@ -83,7 +83,11 @@ TURNS = "python tools/dev/bench.py in-turns --scene mix --scene halves --scene e
 SETTLED = "sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --json && sandmod bench --scene settled --size 1024 --steps 200 --threads 1 --no-sleep --json"
 YARDSTICK = "python tools/dev/bench.py yardstick --scene mix --scene halves --threads 1 --json"
 LOADED = "python tools/dev/bench.py loaded --scene mix --scene halves --scene everything --elements 500 --threads 1 --json"
-FLUIDS = "python tools/dev/fluids.py"  # seconds of runs of the engine: its test is marked slow
+FLUIDS = "python tools/dev/fluids.py"
+HALVES = ("python -c 'from sandmod.jobs import benchmark; from sandmod.world.loading import load_ruleset; "
+          "w = benchmark.scene_bench(load_ruleset(), \"halves\", 512).make(); w.threads = 1; "
+          "print(\"steps with chunks awake:\", sum((w.awake_fraction > 0, w.step())[0] for _ in range(1000)))'")
+SLOW = (FLUIDS, HALVES)  # cheap but seconds of the engine each: their test is marked slow
 README_PYTHON = """python -c 'import re; exec(re.search(r"\\x60{3}python\\n(import sandmod.*?)\\x60{3}", open("README.md").read(), re.S).group(1))'"""
 PLAY_ONE = "sandmod play --benchmark 1"
 FOREST = "sandmod play examples/forest_fire.toml --benchmark 600"
@@ -162,6 +166,8 @@ FIGURES: list[Figure] = [
     measured("docs/performance.md", "take\n0.032 ms a step asleep", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
     measured("docs/performance.md", "against 7.5 ms with", "7.5", SETTLED, lambda out: _settled(out, "awake")),
     measured("docs/performance.md", "updated (232x)", "232", SETTLED, lambda out: _settled(out, "ratio")),
+    Figure("docs/performance.md", "about 450 steps of the 1000", "450", HALVES,
+           lambda output: str(round(int(re.search(r"awake: (\d+)", output).group(1)), -1))),
     Figure("docs/performance.md", "sinks at 0.9 cell a frame", "0.9", FLUIDS, r"sinks ([\d.]+) cell a frame", digits=1),
     fact("docs/performance.md", "into 32x32 chunks", "32", "chunk"),
     fact("docs/performance.md", "block (4 columns by", "4", "plume_columns"),
