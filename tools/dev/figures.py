@@ -166,7 +166,7 @@ FIGURES: list[Figure] = [
     measured("docs/performance.md", "take\n0.032 ms a step asleep", "0.032", SETTLED, lambda out: _settled(out, "asleep")),
     measured("docs/performance.md", "against 7.5 ms with", "7.5", SETTLED, lambda out: _settled(out, "awake")),
     measured("docs/performance.md", "updated (232x)", "232", SETTLED, lambda out: _settled(out, "ratio")),
-    Figure("docs/performance.md", "about 450 steps of the 1000", "450", HALVES,
+    Figure("docs/performance.md", "about 440 steps of the 1000", "440", HALVES,
            lambda output: str(round(int(re.search(r"awake: (\d+)", output).group(1)), -1))),
     Figure("docs/performance.md", "sinks at 0.9 cell a frame", "0.9", FLUIDS, r"sinks ([\d.]+) cell a frame", digits=1),
     fact("docs/performance.md", "into 32x32 chunks", "32", "chunk"),
