@@ -37,7 +37,7 @@ def test_a_measured_figures_text_shares_no_character_with_another_entrys():
 
 
 def test_the_cheap_figures_are_what_the_code_gives_now():
-    """What ``python tools/dev/figures.py --check`` checks: counts, limits, the bundled mods' figures (5 s)."""
+    """What ``python tools/dev/figures.py --check`` checks: counts, limits, the bundled mods' figures (seconds)."""
     _agree([figure for figure in CHEAP if figure.command not in SLOW])
 
 

@@ -8,8 +8,11 @@ A cheap figure is exact and quick (a count, a limit, a figure of a bundled mod):
 command and says where the page differs (``tests/dev/test_figures.py`` does so in plain ``pytest``).
 A measured one is a time, a speed or a ratio: the page names its command and machine, and ``--measure``
 runs it and prints what it gives now; ``--write`` puts the new value into the page where the figure is
-one number (a range, "two to three minutes", is for a person to reword). What a command prints in a
-page's output block is ``pages.py``'s; the changelog and the "what did not help" records are history.
+one number (a range, "two to three minutes", is for a person to reword).
+
+Not listed: what a command prints in a page's output block (``pages.py`` makes those again), the
+reference pages (written from the code by ``reference.py``), and history: the changelog, and the records
+of past measurements that say what they compared (a change tried, "what did not help", a version before).
 """
 
 from __future__ import annotations
