@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -75,3 +77,16 @@ def test_particles_are_spawned_as_the_reference_spawns_them(ruleset, name):
     expected = spawn_reference(reference, ys, xs, element, vx, vy)
     assert kernel.spawn_particles(ys, xs, element, vx, vy) == expected > 100
     same_world(reference, kernel)
+
+
+def test_emitters_and_sprays_hand_the_kernel_arrays_of_one_layout():
+    """Each layout of the cells' arrays is a signature numba compiles paint_cells for anew: an
+    emitter's (a view of a shape's cells) was one more, compiled by the first world that poured."""
+    from sandmod.engine import kernel
+    from sandmod.world.loading import load_world
+    from sandmod.world.scene import build_world
+
+    loaded = load_world(str(Path(__file__).resolve().parent.parent / "examples" / "acid_wall.toml"))
+    world = build_world(loaded.spec, loaded.ruleset, loaded.source, None)
+    world.step()
+    assert all(str(sig[2]).endswith(", C)") and str(sig[3]).endswith(", C)") for sig in kernel.paint_cells.signatures)

@@ -345,7 +345,7 @@ class World:
         t = self.ruleset.tables
         vx, vy = (_AT_REST, _AT_REST) if velocity is None else velocity
         return kernel.paint_cells(
-            self.state, t, np.asarray(ys, np.int64), np.asarray(xs, np.int64), element, cargo, vx, vy, only_empty,
+            self.state, t, np.ascontiguousarray(ys, np.int64), np.ascontiguousarray(xs, np.int64), element, cargo, vx, vy, only_empty,
             chance_threshold(chance), frame_key(self.seed, self.frame, salt), frame_key(self.seed, self.frame, SALT_SPAWN ^ salt),
             self.awake, self._even,
         )  # fmt: skip
