@@ -61,6 +61,48 @@ def install() -> None:
     """Make numba's inliner copy each function once, and LLVM's first round on the kernel's code light."""
     _copy_once()
     _optimize_once()
+    _inline_marked()
+
+
+#: The start of the LLVM names of the functions LLVM must inline wherever they are called.
+_EVERYWHERE: set[str] = set()
+
+
+def inline_everywhere(function) -> None:
+    """Have LLVM inline ``function`` (a plain Python function, about to be compiled) into every caller."""
+    parts = f"{function.__module__}.{function.__qualname__}".split(".")
+    _EVERYWHERE.add("_ZN" + "".join(f"{len(p)}{p}" for p in parts) + "B")
+
+
+def _inline_marked() -> bool:
+    try:
+        from numba.core.codegen import CPUCodeLibrary
+
+        original = CPUCodeLibrary.add_ir_module
+    except (ImportError, AttributeError):
+        return False
+    if getattr(original, "_sandmod", False):
+        return True
+
+    def add_ir_module(self, ir_module):
+        for function in ir_module.functions:
+            if function.blocks and any(function.name.startswith(p) for p in _EVERYWHERE):
+                function.attributes.add("alwaysinline")
+        return original(self, ir_module)
+
+    add_ir_module._sandmod = True
+    CPUCodeLibrary.add_ir_module = add_ir_module
+    optimize = CPUCodeLibrary._optimize_final_module
+
+    def _optimize_final_module(self):
+        own = [f.name for f in self._final_module.functions if not f.is_declaration and f.linkage.name == "external"]
+        if not any(name.startswith(p) for name in own for p in _EVERYWHERE):
+            return optimize(self)
+        manager, builder = self._codegen._module_pass_manager(opt=FUNCTION_OPT, cost="cheap")  # its callers inline it, and optimize it there
+        manager.run(self._final_module, builder)
+
+    CPUCodeLibrary._optimize_final_module = _optimize_final_module
+    return True
 
 
 def _copy_once() -> bool:

@@ -32,6 +32,15 @@ numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was impo
 compiletime.install()  # the cell update compiles in a quarter of the time (see the module)
 
 compiled = njit(cache=True)
-inlined = njit(cache=True, inline="always")
+copied = njit(cache=True, inline="always")
+_inlined = njit(cache=True, _nrt=False)
+
+
+def inlined(function):
+    """Compiled on its own, without reference counting, and inlined by LLVM into every caller."""
+    compiletime.inline_everywhere(function)
+    return _inlined(function)
+
+
 in_place = njit(cache=True, _nrt=False)
 parallel = njit(cache=True, parallel=True)

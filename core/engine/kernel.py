@@ -41,7 +41,7 @@ from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _ente
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
 from .heat import conduct
-from .jit import compiled, in_place, inlined, parallel, prange
+from .jit import compiled, copied, in_place, inlined, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
 from .moves import knock, may_flow, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
@@ -379,7 +379,7 @@ def _tiles_of_pass(awake, woken, frame, p, hands, todo, order):
     return count
 
 
-@inlined
+@copied
 def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, at_once):
     """:func:`step`, its tiles updated by :func:`update_tiles_at_once` where ``at_once`` (a constant
     in each caller), else one after another here."""
