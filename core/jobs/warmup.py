@@ -26,7 +26,7 @@ from typing import Callable
 import numpy as np
 
 #: The parts compiled side by side, longest first, then those a first frame needs.
-PARTS = ("cells with the fast loop", "cells without it", "heat", "pixels", "blasts", "taps and sprays")
+PARTS = ("cells with the fast loop", "cells without it", "heat", "pixels", "blasts", "taps and sprays", "neighbour rules")
 #: The parts a step of a world links together (the rest are called on their own).
 STEP_NEEDS = PARTS[:3]
 
@@ -54,6 +54,10 @@ def compile_part(part: str) -> None:
         world._explode(kernel.take_detonations(s, t, world._detonations), 0)
     elif part == "taps and sprays":
         world.spawn_particles(np.zeros(1, np.int64), np.zeros(1, np.int64), 0, 0.0, 0.0)
+    elif part == "neighbour rules":
+        from ..passes.counts import compile_pass
+
+        compile_pass(world)
     elif part == "pixels":
         world.image(rgb=np.empty((world.height, world.width, 3), np.uint8))
         world.heat_image()

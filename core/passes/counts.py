@@ -29,6 +29,15 @@ def apply_neighbour_rules(world) -> int:
                   rules.into, rules.chance, tiles, key, world.awake, world._even, _DX, _DY)
 
 
+def compile_pass(world) -> None:
+    """Compile the pass (or load it from the cache) with no rules, on no tiles: for the warm-up."""
+    n = len(world.tables.archetype)
+    none = np.zeros(1, np.int64)[:0]
+    _apply(world.state, world.tables, np.zeros(n, np.int32), np.zeros(n, np.int32), np.zeros((1, n), np.uint8),
+           np.zeros(1, np.uint16), np.zeros(1, np.uint8), np.zeros(1, np.uint16), np.zeros(1, np.uint32), none, 0,
+           world.awake, world._even, _DX, _DY)
+
+
 @compiled
 def _decide(cells, start, stop, counted, counts, where, into, chance, x, y, key, dx, dy):
     """What cell (x, y) becomes by the first of its element's rules that fires (-1: none; -2: one
