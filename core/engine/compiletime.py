@@ -1,13 +1,35 @@
-"""Two changes to how numba compiles, for the kernel's sake: each makes it compile in less time,
-and neither changes what it computes (the frames are the same, bit for bit).
+"""Three changes to how numba compiles, for the kernel's sake: each makes it compile in less time,
+and none changes what it computes (the frames are the same, bit for bit: ``tests/test_golden.py``).
 
+- **LLVM inlines the phases, numba compiles each once.** numba's own inlining
+  (``inline="always"``) copies a callee's IR into every call site, so the cell
+  update was one huge function, typed, lowered and optimized as a whole: its
+  Python passes and LLVM's first round on it took most of the compile, and
+  each of the update's two versions (with and without the fast loop) did it
+  all again. A function marked by :func:`inline_everywhere` (the kernel's
+  :data:`~.jit.inlined` ones) is instead compiled once per signature, on its
+  own and cached on its own, like any numba function; its LLVM function is
+  marked ``alwaysinline``, so that LLVM inlines it into each caller when the
+  caller's module is optimized (at -O3, by numba's module pipeline). Its own
+  library gets neither of numba's two -O3 module pipelines nor machine code:
+  it is only what callers link in (numba's module for linking, its functions
+  ``linkonce_odr``, as they were after the first round); its final module
+  keeps only its globals (numba's environment), so the machine code emitted
+  for it is empty. Such a function cannot be called from Python (it has no
+  wrapper for that either): it raises TypeError (:func:`jit_only`). A caller
+  not marked (the kernel's ``step``, ``_update_tile``) is compiled as numba
+  compiles any function. The warm-up can so compile the phases in processes
+  of their own, side by side, and no process compiles one twice
+  (:mod:`sandmod.jobs.warmup`).
 - **The inliner copies each function once.** Before inlining a function
-  (``inline="always"``), numba copies its IR block by block, each block with
+  (``inline="always"``; still so for ``_step_passes``, and for every
+  :data:`~.jit.inlined` function where LLVM's inlining is not installed),
+  numba copies its IR block by block, each block with
   a fresh ``copy.deepcopy`` memo. Every block refers to the function's scope,
   and the scope to every variable, so each block's copy copies all of them
-  again: the cost grows with blocks times variables, and the kernel's phases
-  are inlined into one another (numba issues 8989 and 9204). Here the blocks
-  of one copy share one memo, as one deep copy of the whole function would.
+  again: the cost grows with blocks times variables (numba issues 8989 and
+  9204). Here the blocks of one copy share one memo, as one deep copy of the
+  whole function would.
 - **LLVM's first round is a light one.** numba runs LLVM's function passes
   on each function as it is compiled (at -O3), then the whole -O3 pipeline
   again on the module it links it into. For the kernel's modules the first
@@ -16,9 +38,18 @@ and neither changes what it computes (the frames are the same, bit for bit).
   runs as fast as at -O3 (``tools/dev/bench.py against``, in turns: mix
   1.005x, halves 1.001x, everything 0.991x).
 
-:func:`install` makes both changes; where numba is not as they expect, it leaves it as it is.
-Measured from an empty cache on one idle core (``python -m sandmod.jobs.warmup PART``), the cell
-update without its fast loop took 100 s before, 26 s after; with it, 100 s and 37 s.
+:func:`install` makes the three changes; where numba is not as one expects (a method it
+replaces is missing), it leaves numba as it is for that one, and :data:`LLVM_INLINES` says
+whether LLVM inlines (if not, :data:`~.jit.inlined` falls back to numba's ``inline="always"``).
+
+Measured (2-core VM shared with other work, load about 1.7 from others; each part in a process
+of its own from an empty ``NUMBA_CACHE_DIR``, ``python -m sandmod.jobs.warmup PART``, the step
+being a tiny world's first step after them): the cell update with its fast loop took 47 s of
+CPU with numba's inlining and this module's other two changes, and the one without it, in a
+process of its own, as much again; with LLVM's inlining as above the phases and the update
+take moves 9.7 s, fast loop 2.2 s, phases 6.0 s, the update with and without the fast loop
+2.2 and 1.3 s, then the step 11.0 s (32 s in all, every function compiled once). Libraries
+of marked functions without machine code nor numba's wrappers: 42 s in all before, 32 s after.
 """
 
 from __future__ import annotations
@@ -57,28 +88,90 @@ FUNCTION_OPT = 1
 OURS = "sandmod"
 
 
+#: Whether LLVM inlines the functions marked by :func:`inline_everywhere` (numba is as :func:`install` expects).
+LLVM_INLINES = False
+
+
 def install() -> None:
-    """Make numba's inliner copy each function once, and LLVM's first round on the kernel's code light."""
+    """Make numba's inliner copy each function once, LLVM's first round on the kernel's code light,
+    and LLVM inline the functions marked by :func:`inline_everywhere` (:data:`LLVM_INLINES`)."""
+    global LLVM_INLINES
     _copy_once()
     _optimize_once()
-    _inline_marked()
+    LLVM_INLINES = _inline_marked()
 
 
-#: The start of the LLVM names of the functions LLVM must inline wherever they are called.
-_EVERYWHERE: set[str] = set()
+#: The start of the LLVM names of the functions compiled only for their callers (:func:`inline_everywhere`,
+#: :func:`optimize_in_callers`), and the attribute each gets: ``alwaysinline`` or ``noinline``.
+_EVERYWHERE: dict[str, str] = {}
+_EXTERNAL = None  # llvmlite's external linkage, once imported
+
+
+def _symbol(function) -> str:
+    """The start of the LLVM name numba gives ``function`` (a plain Python function) in every
+    signature: Itanium-mangled, ``_ZN`` then each dotted part of its module and name as its
+    length and itself, then ``B`` and the ABI tags."""
+    parts = f"{function.__module__}.{function.__qualname__}".split(".")
+    return "_ZN" + "".join(f"{len(p)}{p}" for p in parts) + "B"
 
 
 def inline_everywhere(function) -> None:
-    """Have LLVM inline ``function`` (a plain Python function, about to be compiled) into every caller."""
-    parts = f"{function.__module__}.{function.__qualname__}".split(".")
-    _EVERYWHERE.add("_ZN" + "".join(f"{len(p)}{p}" for p in parts) + "B")
+    """Have LLVM inline ``function`` (a plain Python function, about to be compiled) into every caller,
+    its own library left without machine code (see the module)."""
+    _EVERYWHERE[_symbol(function)] = "alwaysinline"
+
+
+def optimize_in_callers(function) -> None:
+    """Have ``function`` (a plain Python function, about to be compiled) optimized at -O3 and made
+    machine code only in the modules of its callers, and never inlined there: its own library is
+    left without machine code, as an inlined one's (see the module)."""
+    _EVERYWHERE[_symbol(function)] = "noinline"
+
+
+class _CompiledToInline:
+    """A mixin for the dispatcher of a function LLVM inlines (:func:`jit_only`): called from Python, it says so."""
+
+    def __call__(self, *args, **kwargs):
+        raise TypeError(
+            f"{self.py_func.__qualname__} is compiled only to be inlined into compiled callers "
+            "(sandmod.engine.jit.inlined): it has no machine code of its own to call from Python"
+        )
+
+
+def jit_only(dispatcher):
+    """``dispatcher`` (numba's, of a function marked by :func:`inline_everywhere`), made to raise
+    TypeError when called from Python: its library has no machine code to call (see the module)."""
+    cls = type(dispatcher)
+    dispatcher.__class__ = type(cls.__name__, (_CompiledToInline, cls), {"__module__": cls.__module__})
+    return dispatcher
+
+
+def _marked(library) -> bool:
+    """Is one of the functions ``library`` compiles (its own, not those it links) marked by :func:`inline_everywhere`?"""
+    return any(
+        function.name.startswith(prefix)
+        for function in library._final_module.functions
+        if not function.is_declaration and function.linkage == _EXTERNAL
+        for prefix in _EVERYWHERE
+    )
+
+
+def _attribute(name: str) -> str | None:
+    return next((attribute for prefix, attribute in _EVERYWHERE.items() if name.startswith(prefix)), None)
 
 
 def _inline_marked() -> bool:
+    """Mark the functions of :data:`_EVERYWHERE` ``alwaysinline`` as numba compiles them, and make their
+    libraries only what callers link in; returns whether it did."""
     try:
+        import llvmlite.binding as ll
         from numba.core.codegen import CPUCodeLibrary
 
-        original = CPUCodeLibrary.add_ir_module
+        global _EXTERNAL
+        _EXTERNAL = ll.Linkage.external
+        original, optimize = CPUCodeLibrary.add_ir_module, CPUCodeLibrary._optimize_final_module
+        CPUCodeLibrary._get_module_for_linking  # noqa: B018
+        ll.create_new_module_pass_manager().add_global_dead_code_eliminate_pass
     except (ImportError, AttributeError):
         return False
     if getattr(original, "_sandmod", False):
@@ -86,21 +179,33 @@ def _inline_marked() -> bool:
 
     def add_ir_module(self, ir_module):
         for function in ir_module.functions:
-            if function.blocks and any(function.name.startswith(p) for p in _EVERYWHERE):
-                function.attributes.add("alwaysinline")
+            attribute = _attribute(function.name) if function.blocks else None
+            if attribute is not None:
+                function.attributes.add(attribute)
         return original(self, ir_module)
 
-    add_ir_module._sandmod = True
-    CPUCodeLibrary.add_ir_module = add_ir_module
-    optimize = CPUCodeLibrary._optimize_final_module
-
     def _optimize_final_module(self):
-        own = [f.name for f in self._final_module.functions if not f.is_declaration and f.linkage.name == "external"]
-        if not any(name.startswith(p) for name in own for p in _EVERYWHERE):
+        if not _marked(self):
             return optimize(self)
-        manager, builder = self._codegen._module_pass_manager(opt=FUNCTION_OPT, cost="cheap")  # its callers inline it, and optimize it there
-        manager.run(self._final_module, builder)
+        # What callers link in: the functions as they are (after the first round), external ones
+        # made linkonce_odr as numba's _get_module_for_linking makes them. Each caller inlines them
+        # and optimizes them there, at -O3; they are never called on their own.
+        shared = self._final_module.clone()
+        for function in shared.functions:
+            if not function.is_declaration and function.linkage == _EXTERNAL:
+                function.linkage = "linkonce_odr"
+        self._shared_module = shared
+        # This library's own machine code: none of its functions (nor the wrappers Python would call
+        # them through), only its globals (numba's environment for it).
+        for function in self._final_module.functions:
+            if not function.is_declaration:
+                function.linkage = "internal"
+        manager = ll.create_new_module_pass_manager()
+        manager.add_global_dead_code_eliminate_pass()
+        manager.run(self._final_module, self._codegen._pass_builder(opt=0))
 
+    add_ir_module._sandmod = _optimize_final_module._sandmod = True
+    CPUCodeLibrary.add_ir_module = add_ir_module
     CPUCodeLibrary._optimize_final_module = _optimize_final_module
     return True
 
