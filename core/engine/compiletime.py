@@ -42,14 +42,24 @@ and none changes what it computes (the frames are the same, bit for bit: ``tests
 replaces is missing), it leaves numba as it is for that one, and :data:`LLVM_INLINES` says
 whether LLVM inlines (if not, :data:`~.jit.inlined` falls back to numba's ``inline="always"``).
 
-Measured (2-core VM shared with other work, load about 1.7 from others; each part in a process
-of its own from an empty ``NUMBA_CACHE_DIR``, ``python -m sandmod.jobs.warmup PART``, the step
-being a tiny world's first step after them): the cell update with its fast loop took 47 s of
-CPU with numba's inlining and this module's other two changes, and the one without it, in a
-process of its own, as much again; with LLVM's inlining as above the phases and the update
-take moves 9.7 s, fast loop 2.2 s, phases 6.0 s, the update with and without the fast loop
-2.2 and 1.3 s, then the step 11.0 s (32 s in all, every function compiled once). Libraries
-of marked functions without machine code nor numba's wrappers: 42 s in all before, 32 s after.
+Measured on the project's 2-core VM with other work running (load about 2), each part of the
+warm-up in a process of its own, one after another, from an empty cache (``python -m
+sandmod.jobs.warmup PART``; "step" a tiny world's first step after them, linking them), CPU
+seconds in all for the kernel a step needs:
+
+- LLVM's inlining, each marked function's library with numba's wrappers and machine code: the
+  update with and without its fast loop 40 in one process (the warm-up compiled each in a
+  process of its own, each all of it), step 8; compiled by subtrees, each function once: 51
+  (moves 17.6, phases 9.3, fast loop 4.4, the update 11.7, step 8.0);
+- the libraries of marked functions without machine code: 44;
+- and without numba's wrappers for Python (a marked function is never called from Python): 37;
+- the update's two versions (``step_region_fast``, ``_full``) marked too, so that ``_update_tile``
+  optimizes them once, and ``_update_tile`` optimized only in its callers
+  (:func:`optimize_in_callers`): 33 (moves 10.6, fast loop 2.8, phases 7.0, the update with and
+  without the fast loop 2.6 and 1.8, step 8.2).
+
+The kernel runs as fast as with numba's inlining (``tools/dev/bench.py against``, in turns, one
+thread: mix 0.993x, halves 0.991x, everything 0.999x; see ``docs/performance.md``).
 """
 
 from __future__ import annotations

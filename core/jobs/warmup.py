@@ -55,10 +55,10 @@ def _tiny_world():
 
 
 def phase_signatures(world) -> dict:
-    """The phases of the cell update, each with the types its caller hands it (as
-    :func:`sandmod.engine.kernel.step_region` calls it): compiled for these, each is found in the
+    """The phases of the cell update and the update itself, each with the types its caller hands it
+    (as :func:`sandmod.engine.kernel.step_region` or ``_update_tile`` calls it): compiled for these, each is found in the
     cache when the cell update compiles. (A type that differs costs a compile, not a wrong result:
-    the update compiles the phase for its own types; ``tests/test_warmup.py`` checks they agree.)"""
+    the update compiles the phase for its own types; ``tests/test_compiletime.py`` checks they agree.)"""
     from numba import typeof, types
 
     from ..engine import fire, heat, kernel, moves, reactions
@@ -73,12 +73,10 @@ def phase_signatures(world) -> dict:
         reactions.lifetime: (S, T, i, i, e, i),
         reactions.react: (S, T, i, i, e, i, i, i, i),
         kernel._fast_cells: (S, T, i, i, i, i, yes, i, i, i, ambient, i, i, i, i, i, box, box),
-        kernel.step_region_fast: (S, T, i, i, i, i, typeof(world.awake), typeof(world._woken), typeof(world._stirred), counts, i, i, i, i, i, i, typeof(world._seen)),
-        kernel.step_region_full: None,
         heat.conduct: (S, T, i, typeof(world.awake), typeof(world._woken), typeof(world._even), typeof(world._stirred), i, i, i, i),
     }
-    signatures[kernel.step_region_full] = signatures[kernel.step_region_fast]
-    return signatures
+    region = (S, T, i, i, i, i, typeof(world.awake), typeof(world._woken), typeof(world._stirred), counts, i, i, i, i, i, i, typeof(world._seen))
+    return signatures | {kernel.step_region_fast: region, kernel.step_region_full: region}
 
 
 def compile_part(part: str) -> None:
