@@ -137,6 +137,9 @@ def test_where_numba_is_not_as_expected_numba_inlines_instead(monkeypatch):
     monkeypatch.delattr(CPUCodeLibrary, "_get_module_for_linking")
     assert not compiletime._inline_marked()
     monkeypatch.undo()
+    monkeypatch.setattr(CPUCodeLibrary, "_get_module_for_linking", lambda self: self._final_module)  # hands out another module
+    assert not compiletime._inline_marked()
+    monkeypatch.undo()
     monkeypatch.setattr(compiletime, "LLVM_INLINES", False)
     copied = jit.inlined(_leaf, cache=False)
     assert copied.targetoptions.get("inline") == "always" and "_nrt" not in copied.targetoptions

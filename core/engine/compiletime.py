@@ -54,9 +54,10 @@ seconds in all for the kernel a step needs:
 - the libraries of marked functions without machine code: 44;
 - and without numba's wrappers for Python (a marked function is never called from Python): 37;
 - the update's two versions (``step_region_fast``, ``_full``) marked too, so that ``_update_tile``
-  optimizes them once, and ``_update_tile`` optimized only in its callers
-  (:func:`optimize_in_callers`): 33 (moves 10.6, fast loop 2.8, phases 7.0, the update with and
-  without the fast loop 2.6 and 1.8, step 8.2).
+  optimizes them once: 34.5 (moves 9.9, fast loop 2.6, phases 6.5, the update with and without
+  the fast loop 2.6 and 1.7, step 11.3). ``_update_tile`` optimized only in its callers
+  (``noinline``, its library without machine code) saved 3 s more of the step, but the kernel
+  ran slower (``bench.py against``, numba's inlining over it: mix 1.073x, everything 1.047x).
 
 The kernel runs as fast as with numba's inlining (``tools/dev/bench.py against``, in turns, one
 thread: mix 0.993x, halves 0.991x, everything 0.999x; see ``docs/performance.md``).
@@ -111,8 +112,8 @@ def install() -> None:
     LLVM_INLINES = _inline_marked()
 
 
-#: The start of the LLVM names of the functions compiled only for their callers (:func:`inline_everywhere`,
-#: :func:`optimize_in_callers`), and the attribute each gets: ``alwaysinline`` or ``noinline``.
+#: The start of the LLVM names of the functions compiled only for their callers (:func:`inline_everywhere`),
+#: and the attribute each gets (``alwaysinline``).
 _EVERYWHERE: dict[str, str] = {}
 _EXTERNAL = None  # llvmlite's external linkage, once imported
 
@@ -129,13 +130,6 @@ def inline_everywhere(function) -> None:
     """Have LLVM inline ``function`` (a plain Python function, about to be compiled) into every caller,
     its own library left without machine code (see the module)."""
     _EVERYWHERE[_symbol(function)] = "alwaysinline"
-
-
-def optimize_in_callers(function) -> None:
-    """Have ``function`` (a plain Python function, about to be compiled) optimized at -O3 and made
-    machine code only in the modules of its callers, and never inlined there: its own library is
-    left without machine code, as an inlined one's (see the module)."""
-    _EVERYWHERE[_symbol(function)] = "noinline"
 
 
 class _CompiledToInline:
@@ -171,20 +165,26 @@ def _attribute(name: str) -> str | None:
 
 
 def _inline_marked() -> bool:
-    """Mark the functions of :data:`_EVERYWHERE` ``alwaysinline`` as numba compiles them, and make their
-    libraries only what callers link in; returns whether it did."""
+    """Give the functions of :data:`_EVERYWHERE` their attribute (``alwaysinline``, ``noinline``) as
+    numba compiles them, and make their libraries only what callers link in; returns whether it
+    did: not where numba is not as expected (a method replaced or relied on is missing, or
+    ``_get_module_for_linking`` no longer hands out ``_shared_module``, which is set here)."""
     try:
         import llvmlite.binding as ll
-        from numba.core.codegen import CPUCodeLibrary
+        from numba.core.codegen import CPUCodeLibrary, CPUCodegen
 
+        original, optimize = CPUCodeLibrary.add_ir_module, CPUCodeLibrary._optimize_final_module
+        if "_shared_module" not in CPUCodeLibrary._get_module_for_linking.__code__.co_names:
+            return False
+        CPUCodegen._pass_builder  # noqa: B018
+        ll.create_new_module_pass_manager().add_global_dead_code_eliminate_pass  # noqa: B018
         global _EXTERNAL
         _EXTERNAL = ll.Linkage.external
-        original, optimize = CPUCodeLibrary.add_ir_module, CPUCodeLibrary._optimize_final_module
-        CPUCodeLibrary._get_module_for_linking  # noqa: B018
-        ll.create_new_module_pass_manager().add_global_dead_code_eliminate_pass
     except (ImportError, AttributeError):
         return False
     if getattr(original, "_sandmod", False):
+        global _EVERYWHERE
+        _EVERYWHERE = original._everywhere  # another copy of this module installed it: one list of marks
         return True
 
     def add_ir_module(self, ir_module):
@@ -215,6 +215,7 @@ def _inline_marked() -> bool:
         manager.run(self._final_module, self._codegen._pass_builder(opt=0))
 
     add_ir_module._sandmod = _optimize_final_module._sandmod = True
+    add_ir_module._everywhere = _EVERYWHERE
     CPUCodeLibrary.add_ir_module = add_ir_module
     CPUCodeLibrary._optimize_final_module = _optimize_final_module
     return True

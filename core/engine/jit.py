@@ -51,16 +51,5 @@ def inlined(function, *, cache: bool = True):
     return compiletime.jit_only(dispatcher) if isinstance(dispatcher, Dispatcher) else dispatcher
 
 
-def linked(function):
-    """:data:`compiled`, but optimized and made machine code only in its callers, never inlined
-    (:func:`.compiletime.optimize_in_callers`): for a large function each caller links in and
-    would optimize again anyway. It cannot be called from Python."""
-    if not compiletime.LLVM_INLINES:
-        return compiled(function)
-    compiletime.optimize_in_callers(function)
-    dispatcher = njit(cache=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)(function)
-    return compiletime.jit_only(dispatcher) if isinstance(dispatcher, Dispatcher) else dispatcher
-
-
 in_place = njit(cache=True, _nrt=False)
 parallel = njit(cache=True, parallel=True)
