@@ -188,7 +188,8 @@ def _cached(function: str) -> bool:
 def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[], object]) -> None:
     """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs, each once
     the parts it waits for are done; call ``once_stepped`` as soon as those a step needs
-    (:data:`STEP_NEEDS`) are done, while the others compile."""
+    (:data:`STEP_NEEDS`) are done, while the others compile (one process fewer meanwhile: it
+    compiles too)."""
     waiting = list(PARTS)
     running: dict[subprocess.Popen, str] = {}
     finished: set[str] = set()
@@ -196,20 +197,22 @@ def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[],
     env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
     try:
         while waiting or running:
+            stepping = once_stepped is not None and finished.issuperset(STEP_NEEDS)  # this process is about to compile too
             ready = [part for part in waiting if finished.issuperset(PARTS[part])]
-            while ready and len(running) < most:
+            while ready and len(running) < max(1, most - stepping):
                 part = ready.pop(0)
                 waiting.remove(part)
                 command = [sys.executable, "-m", "sandmod.jobs.warmup", part]
                 # What fails here fails again, and says why, when this process compiles it itself.
                 running[subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)] = part
+            if stepping:
+                once_stepped()  # while the parts just started compile
+                once_stepped = None
+                continue
             time.sleep(0.05)
             for process in [p for p in running if p.poll() is not None]:
                 finished.add(running.pop(process))
                 progress(len(finished))
-                if finished.issuperset(STEP_NEEDS) and once_stepped is not None:
-                    once_stepped()
-                    once_stepped = None
     finally:
         for process in running:
             process.kill()
