@@ -152,8 +152,35 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
     monkeypatch.setattr(warmup, "_compile_parts", lambda progress, stepped: (called.append("parts"), stepped()))  # no processes
     assert not kernelcache.is_compiled()
     compile_kernels(ruleset)
-    assert called == ["parts", "step", "conduct", "take_detonations", "explode"]
+    assert called == ["parts", "step", "take_detonations", "explode"]  # conduct: compiled by a part, linked by the step
     assert kernelcache.is_compiled()
+
+
+def test_warmup_starts_each_part_once_those_it_calls_are_done_and_steps_when_the_step_can(monkeypatch):
+    events = []
+
+    class Part:  # a process that is done the first time it is asked
+        def __init__(self, command, **kwargs):
+            self.part = command[-1]
+            events.append(("start", self.part))
+
+        def poll(self):
+            events.append(("done", self.part))
+            return 0
+
+        def kill(self):
+            raise AssertionError("nothing is left running")
+
+    monkeypatch.setattr(warmup.subprocess, "Popen", Part)
+    monkeypatch.setattr(warmup.time, "sleep", lambda seconds: None)
+    warmup._compile_parts(lambda done: None, lambda: events.append(("step", None)))
+    started = [part for event, part in events if event == "start"]
+    assert sorted(started) == sorted(warmup.PARTS)  # each once
+    for part, needs in warmup.PARTS.items():
+        assert set(needs) <= set(warmup.PARTS) and all(events.index(("done", need)) < events.index(("start", part)) for need in needs)
+    assert set(warmup.STEP_NEEDS) <= set(warmup.PARTS)
+    assert all(events.index(("done", part)) < events.index(("step", None)) for part in warmup.STEP_NEEDS)
+    assert events.count(("step", None)) == 1
 
 
 def test_warmup_compiles_for_one_thread_and_several_and_says_where(tmp_path, monkeypatch):

@@ -1,17 +1,19 @@
-"""The changes to how numba compiles (sandmod.engine.compiletime): in place, and copies still copies.
+"""The changes to how numba compiles (sandmod.engine.compiletime): in place, copies still copies,
+and the functions marked to be inlined are inlined by LLVM, with no machine code of their own.
 
 That they change nothing the kernel computes is test_golden's to show (its frames, bit for bit).
 """
 
-import copy
-
+import numpy as np
+import pytest
 from numba import njit
 from numba.core import inline_closurecall, ir
 from numba.core.codegen import CPUCodeLibrary
 from numba.core.compiler import run_frontend
 
 import sandmod.engine.jit  # noqa: F401  (installs them)
-from sandmod.engine import compiletime
+from sandmod.engine import compiletime, jit
+from sandmod.jobs import warmup
 
 
 def _branchy(a, b):
@@ -78,3 +80,73 @@ def test_only_our_code_gets_the_light_first_round(monkeypatch):
     monkeypatch.setattr(compiletime, "OURS", "test_compiletime")  # as if this module were the kernel's
     assert njit(lambda a: a * 3 + 1)(20) == 61
     assert levels and set(levels) == {compiletime.FUNCTION_OPT}
+
+
+def _leaf(a, i):
+    return a[i] * 3 + 1
+
+
+def _middle(a, i):
+    return _leaf_inlined(a, i) - _leaf_inlined(a, i + 1)
+
+
+_leaf_inlined = jit.inlined(_leaf, cache=False)
+_middle_inlined = jit.inlined(_middle, cache=False)
+
+
+@njit(_nrt=False)
+def _caller(a):
+    total = 0
+    for i in range(len(a) - 1):
+        total += _middle_inlined(a, i) * i
+    return total
+
+
+def _library(dispatcher):
+    return dispatcher.overloads[dispatcher.signatures[0]].library
+
+
+def _defined(module):
+    return [function.name for function in module.functions if not function.is_declaration]
+
+
+def test_llvm_inlining_is_in_place_once():
+    add, optimize = CPUCodeLibrary.add_ir_module, CPUCodeLibrary._optimize_final_module
+    assert compiletime.LLVM_INLINES and add._sandmod and optimize._sandmod
+    compiletime.install()  # again: nothing wrapped twice
+    assert CPUCodeLibrary.add_ir_module is add and CPUCodeLibrary._optimize_final_module is optimize
+
+
+def test_a_marked_function_is_inlined_by_llvm_into_its_callers_and_has_no_machine_code():
+    a = np.arange(12, dtype=np.int64) ** 2
+    assert _caller(a) == sum((_leaf(a, i) - _leaf(a, i + 1)) * i for i in range(len(a) - 1))
+    caller = _library(_caller)._final_module
+    assert any("_caller" in name for name in _defined(caller))  # a caller not marked: numba's own pipeline and machine code
+    assert not any(name.startswith(tuple(compiletime._EVERYWHERE)) for name in _defined(caller))  # inlined, none left
+    assert "call" not in "".join(line for line in str(caller).splitlines() if "_leaf" in line or "_middle" in line)
+    for marked in (_middle_inlined, _leaf_inlined):
+        library = _library(marked)
+        assert _defined(library._final_module) == []  # no machine code of its own, not even a wrapper
+        shared = [f for f in library._get_module_for_linking().functions if f.name.startswith(tuple(compiletime._EVERYWHERE))]
+        assert shared and all("alwaysinline" in str(f).split("{")[0] for f in shared if not f.is_declaration)
+    with pytest.raises(TypeError, match="inlined into compiled callers"):
+        _middle_inlined(a, 1)
+
+
+def test_where_numba_is_not_as_expected_numba_inlines_instead(monkeypatch):
+    monkeypatch.delattr(CPUCodeLibrary, "_get_module_for_linking")
+    assert not compiletime._inline_marked()
+    monkeypatch.undo()
+    monkeypatch.setattr(CPUCodeLibrary, "_get_module_for_linking", lambda self: self._final_module)  # hands out another module
+    assert not compiletime._inline_marked()
+    monkeypatch.undo()
+    monkeypatch.setattr(compiletime, "LLVM_INLINES", False)
+    copied = jit.inlined(_leaf, cache=False)
+    assert copied.targetoptions.get("inline") == "always" and "_nrt" not in copied.targetoptions
+
+
+def test_the_warmup_compiles_each_phase_for_the_types_the_kernel_calls_it_with():
+    warmup.compile_new_kernels()  # as the test session's start does, if it has not
+    for function, signature in warmup.phase_signatures(warmup._tiny_world()).items():
+        compiled = [key[0] for key in function._cache._cache_file._load_index()]
+        assert compiled == [tuple(signature)], function.py_func.__qualname__  # one version: the warmup's is the kernel's

@@ -1,13 +1,35 @@
-"""Two changes to how numba compiles, for the kernel's sake: each makes it compile in less time,
-and neither changes what it computes (the frames are the same, bit for bit).
+"""Three changes to how numba compiles, for the kernel's sake: each makes it compile in less time,
+and none changes what it computes (the frames are the same, bit for bit: ``tests/test_golden.py``).
 
+- **LLVM inlines the phases, numba compiles each once.** numba's own inlining
+  (``inline="always"``) copies a callee's IR into every call site, so the cell
+  update was one huge function, typed, lowered and optimized as a whole: its
+  Python passes and LLVM's first round on it took most of the compile, and
+  each of the update's two versions (with and without the fast loop) did it
+  all again. A function marked by :func:`inline_everywhere` (the kernel's
+  :data:`~.jit.inlined` ones) is instead compiled once per signature, on its
+  own and cached on its own, like any numba function; its LLVM function is
+  marked ``alwaysinline``, so that LLVM inlines it into each caller when the
+  caller's module is optimized (at -O3, by numba's module pipeline). Its own
+  library gets neither of numba's two -O3 module pipelines nor machine code:
+  it is only what callers link in (numba's module for linking, its functions
+  ``linkonce_odr``, as they were after the first round); its final module
+  keeps only its globals (numba's environment), so the machine code emitted
+  for it is empty. Such a function cannot be called from Python (it has no
+  wrapper for that either): it raises TypeError (:func:`jit_only`). A caller
+  not marked (the kernel's ``step``, ``_update_tile``) is compiled as numba
+  compiles any function. The warm-up can so compile the phases in processes
+  of their own, side by side, and no process compiles one twice
+  (:mod:`sandmod.jobs.warmup`).
 - **The inliner copies each function once.** Before inlining a function
-  (``inline="always"``), numba copies its IR block by block, each block with
+  (``inline="always"``; still so for ``_step_passes``, and for every
+  :data:`~.jit.inlined` function where LLVM's inlining is not installed),
+  numba copies its IR block by block, each block with
   a fresh ``copy.deepcopy`` memo. Every block refers to the function's scope,
   and the scope to every variable, so each block's copy copies all of them
-  again: the cost grows with blocks times variables, and the kernel's phases
-  are inlined into one another (numba issues 8989 and 9204). Here the blocks
-  of one copy share one memo, as one deep copy of the whole function would.
+  again: the cost grows with blocks times variables (numba issues 8989 and
+  9204). Here the blocks of one copy share one memo, as one deep copy of the
+  whole function would.
 - **LLVM's first round is a light one.** numba runs LLVM's function passes
   on each function as it is compiled (at -O3), then the whole -O3 pipeline
   again on the module it links it into. For the kernel's modules the first
@@ -16,9 +38,30 @@ and neither changes what it computes (the frames are the same, bit for bit).
   runs as fast as at -O3 (``tools/dev/bench.py against``, in turns: mix
   1.005x, halves 1.001x, everything 0.991x).
 
-:func:`install` makes both changes; where numba is not as they expect, it leaves it as it is.
-Measured from an empty cache on one idle core (``python -m sandmod.jobs.warmup PART``), the cell
-update without its fast loop took 100 s before, 26 s after; with it, 100 s and 37 s.
+:func:`install` makes the three changes; where numba is not as one expects (a method it
+replaces is missing), it leaves numba as it is for that one, and :data:`LLVM_INLINES` says
+whether LLVM inlines (if not, :data:`~.jit.inlined` falls back to numba's ``inline="always"``).
+
+Measured on the project's 2-core VM with other work running (load about 2), each part of the
+warm-up in a process of its own, one after another, from an empty cache (``python -m
+sandmod.jobs.warmup PART``; "step" a tiny world's first step after them, linking them), CPU
+seconds in all for the kernel a step needs:
+
+- LLVM's inlining, each marked function's library with numba's wrappers and machine code: the
+  update with and without its fast loop 40 in one process (the warm-up compiled each in a
+  process of its own, each all of it), step 8; compiled by subtrees, each function once: 51
+  (moves 17.6, phases 9.3, fast loop 4.4, the update 11.7, step 8.0);
+- the libraries of marked functions without machine code: 44;
+- and without numba's wrappers for Python (a marked function is never called from Python): 37;
+- the update's two versions (``step_region_fast``, ``_full``) marked too, so that ``_update_tile``
+  optimizes them once: 34.5 (moves 9.9, fast loop 2.6, phases 6.5, the update with and without
+  the fast loop 2.6 and 1.7, step 11.3). ``_update_tile`` optimized only in its callers
+  (``noinline``, its library without machine code) saved 3 s more of the step, but the kernel
+  ran slower (``bench.py against``, numba's inlining over it: mix 1.073x, everything 1.047x).
+
+The kernel runs as fast as with numba's inlining (``tools/dev/bench.py against``, in turns, one
+thread, numba's inlining over LLVM's in three runs: mix 0.98 to 1.07x, halves 0.98 to 1.00x,
+everything 0.98 to 1.03x; see ``docs/performance.md``).
 """
 
 from __future__ import annotations
@@ -57,10 +100,126 @@ FUNCTION_OPT = 1
 OURS = "sandmod"
 
 
+#: Whether LLVM inlines the functions marked by :func:`inline_everywhere` (numba is as :func:`install` expects).
+LLVM_INLINES = False
+
+
 def install() -> None:
-    """Make numba's inliner copy each function once, and LLVM's first round on the kernel's code light."""
+    """Make numba's inliner copy each function once, LLVM's first round on the kernel's code light,
+    and LLVM inline the functions marked by :func:`inline_everywhere` (:data:`LLVM_INLINES`)."""
+    global LLVM_INLINES
     _copy_once()
     _optimize_once()
+    LLVM_INLINES = _inline_marked()
+
+
+#: The start of the LLVM names of the functions compiled only for their callers (:func:`inline_everywhere`),
+#: and the attribute each gets (``alwaysinline``).
+_EVERYWHERE: dict[str, str] = {}
+_EXTERNAL = None  # llvmlite's external linkage, once imported
+
+
+def _symbol(function) -> str:
+    """The start of the LLVM name numba gives ``function`` (a plain Python function) in every
+    signature: Itanium-mangled, ``_ZN`` then each dotted part of its module and name as its
+    length and itself, then ``B`` and the ABI tags."""
+    parts = f"{function.__module__}.{function.__qualname__}".split(".")
+    return "_ZN" + "".join(f"{len(p)}{p}" for p in parts) + "B"
+
+
+def inline_everywhere(function) -> None:
+    """Have LLVM inline ``function`` (a plain Python function, about to be compiled) into every caller,
+    its own library left without machine code (see the module)."""
+    _EVERYWHERE[_symbol(function)] = "alwaysinline"
+
+
+class _CompiledToInline:
+    """A mixin for the dispatcher of a function LLVM inlines (:func:`jit_only`): called from Python, it says so."""
+
+    def __call__(self, *args, **kwargs):
+        raise TypeError(
+            f"{self.py_func.__qualname__} is compiled only to be inlined into compiled callers "
+            "(sandmod.engine.jit.inlined): it has no machine code of its own to call from Python"
+        )
+
+
+def jit_only(dispatcher):
+    """``dispatcher`` (numba's, of a function marked by :func:`inline_everywhere`), made to raise
+    TypeError when called from Python: its library has no machine code to call (see the module)."""
+    cls = type(dispatcher)
+    dispatcher.__class__ = type(cls.__name__, (_CompiledToInline, cls), {"__module__": cls.__module__})
+    return dispatcher
+
+
+def _marked(library) -> bool:
+    """Is one of the functions ``library`` compiles (its own, not those it links) marked by :func:`inline_everywhere`?"""
+    return any(
+        function.name.startswith(prefix)
+        for function in library._final_module.functions
+        if not function.is_declaration and function.linkage == _EXTERNAL
+        for prefix in _EVERYWHERE
+    )
+
+
+def _attribute(name: str) -> str | None:
+    return next((attribute for prefix, attribute in _EVERYWHERE.items() if name.startswith(prefix)), None)
+
+
+def _inline_marked() -> bool:
+    """Give the functions of :data:`_EVERYWHERE` their attribute (``alwaysinline``, ``noinline``) as
+    numba compiles them, and make their libraries only what callers link in; returns whether it
+    did: not where numba is not as expected (a method replaced or relied on is missing, or
+    ``_get_module_for_linking`` no longer hands out ``_shared_module``, which is set here)."""
+    try:
+        import llvmlite.binding as ll
+        from numba.core.codegen import CPUCodeLibrary, CPUCodegen
+
+        original, optimize = CPUCodeLibrary.add_ir_module, CPUCodeLibrary._optimize_final_module
+        if "_shared_module" not in CPUCodeLibrary._get_module_for_linking.__code__.co_names:
+            return False
+        CPUCodegen._pass_builder  # noqa: B018
+        ll.create_new_module_pass_manager().add_global_dead_code_eliminate_pass  # noqa: B018
+        global _EXTERNAL
+        _EXTERNAL = ll.Linkage.external
+    except (ImportError, AttributeError):
+        return False
+    if getattr(original, "_sandmod", False):
+        global _EVERYWHERE
+        _EVERYWHERE = original._everywhere  # another copy of this module installed it: one list of marks
+        return True
+
+    def add_ir_module(self, ir_module):
+        for function in ir_module.functions:
+            attribute = _attribute(function.name) if function.blocks else None
+            if attribute is not None:
+                function.attributes.add(attribute)
+        return original(self, ir_module)
+
+    def _optimize_final_module(self):
+        if not _marked(self):
+            return optimize(self)
+        # What callers link in: the functions as they are (after the first round), external ones
+        # made linkonce_odr as numba's _get_module_for_linking makes them. Each caller inlines them
+        # and optimizes them there, at -O3; they are never called on their own.
+        shared = self._final_module.clone()
+        for function in shared.functions:
+            if not function.is_declaration and function.linkage == _EXTERNAL:
+                function.linkage = "linkonce_odr"
+        self._shared_module = shared
+        # This library's own machine code: none of its functions (nor the wrappers Python would call
+        # them through), only its globals (numba's environment for it).
+        for function in self._final_module.functions:
+            if not function.is_declaration:
+                function.linkage = "internal"
+        manager = ll.create_new_module_pass_manager()
+        manager.add_global_dead_code_eliminate_pass()
+        manager.run(self._final_module, self._codegen._pass_builder(opt=0))
+
+    add_ir_module._sandmod = _optimize_final_module._sandmod = True
+    add_ir_module._everywhere = _EVERYWHERE
+    CPUCodeLibrary.add_ir_module = add_ir_module
+    CPUCodeLibrary._optimize_final_module = _optimize_final_module
+    return True
 
 
 def _copy_once() -> bool:

@@ -4,13 +4,18 @@ decorators every compiled function takes (the numba flags, in one place). Import
 
 - :data:`compiled`: a function of its own, called. For those that take plain numbers (LLVM
   inlines them where it pays), and for rare work that takes arrays.
-- :data:`inlined`: compiled into each caller by numba (``inline="always"``). For the phases of
-  the per-cell update, which take arrays: called, each call would count references to every
-  array it is handed, and at a few hundred million cells a second that costs more than the physics.
+- :func:`inlined`: compiled once, on its own, without numba's reference counting, and inlined
+  by LLVM into every caller (:mod:`.compiletime`): for the phases of the per-cell update, which
+  take arrays. Called, each call would count references to every array it is handed, and at a
+  few hundred million cells a second that costs more than the physics (17 times slower,
+  measured); copied into each caller by numba, as before, the update compiled as one huge
+  function, twice (with and without its fast loop), each time in full. These have no machine
+  code of their own and cannot be called from Python. Where numba is not as
+  :mod:`.compiletime` expects, numba copies them into each caller instead (``inline="always"``).
+- :data:`copied`: copied into each caller by numba (``inline="always"``): for ``_step_passes``,
+  whose constant ``at_once`` keeps the parallel kernel out of the serial step.
 - :data:`in_place`: a function that updates the arrays it is handed and makes none, compiled
-  without numba's reference counting (``_nrt=False``). The per-cell update is one: each
-  phase inlined into it would otherwise count a reference to each array it takes, for every
-  cell (17 times slower, measured).
+  without numba's reference counting (``_nrt=False``), called.
 - :data:`parallel`: a function whose ``prange`` loops run on numba's threads.
 """
 
@@ -25,6 +30,7 @@ os.environ.setdefault("NUMBA_CACHE_DIR", str(kernel_cache_dir()))  # read when n
 
 import numba  # noqa: E402
 from numba import njit, prange  # noqa: E402, F401
+from numba.core.dispatcher import Dispatcher  # noqa: E402
 
 from . import compiletime  # noqa: E402
 
@@ -32,6 +38,18 @@ numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # in case numba was impo
 compiletime.install()  # the cell update compiles in a quarter of the time (see the module)
 
 compiled = njit(cache=True)
-inlined = njit(cache=True, inline="always")
+copied = njit(cache=True, inline="always")
+
+
+def inlined(function, *, cache: bool = True):
+    """Compiled once, on its own and without reference counting, and inlined by LLVM into every
+    caller; where numba is not as :mod:`.compiletime` expects, copied into each caller by numba instead."""
+    if not compiletime.LLVM_INLINES:
+        return njit(cache=cache, inline="always")(function)
+    compiletime.inline_everywhere(function)
+    dispatcher = njit(cache=cache, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)(function)
+    return compiletime.jit_only(dispatcher) if isinstance(dispatcher, Dispatcher) else dispatcher
+
+
 in_place = njit(cache=True, _nrt=False)
 parallel = njit(cache=True, parallel=True)

@@ -41,7 +41,7 @@ from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _ente
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
 from .heat import conduct
-from .jit import compiled, in_place, inlined, parallel, prange
+from .jit import compiled, copied, inlined, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
 from .moves import knock, may_flow, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
@@ -287,7 +287,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             busy_box = stir_box = (sx1, sx0 - 1, y, y)
             count = sx1 - sx0
             visited += count
-            n = 0
+            n = np.int64(0)  # not the literal 0: numba would compile _fast_cells for it too, while it types the loop
             while n < count:
                 if fast:
                     n, x, e, ready, busy_box, stir_box = _fast_cells(s, t, y, sx0, sx1, n, forward, present, keys[4], keys[5], ambient, x0, y0, x1, y1, frame, busy_box, stir_box)
@@ -317,13 +317,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     return visited - HANDED_ON_COST * handed_on if fast else 0
 
 
-@in_place
+@inlined
 def step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
     """:func:`step_region` with its fast loop."""
     return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, True)
 
 
-@in_place
+@inlined
 def step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
     """:func:`step_region` without its fast loop: every cell gets the full update."""
     return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, False)
@@ -379,7 +379,7 @@ def _tiles_of_pass(awake, woken, frame, p, hands, todo, order):
     return count
 
 
-@inlined
+@copied
 def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, at_once):
     """:func:`step`, its tiles updated by :func:`update_tiles_at_once` where ``at_once`` (a constant
     in each caller), else one after another here."""

@@ -3,12 +3,13 @@ saying on the terminal how far along it is.
 
 numba compiles a function when it is first called, and caches what it
 compiled on disk (:mod:`sandmod.engine.kernelcache`); a later process loads it in a
-fraction of a second. The parts that take longest (the cell update with and
-without its fast loop, about a quarter of a minute each) do not depend on
-each other, so :func:`compile_kernels` compiles each in a process of its own,
-as many at once as there are CPUs, then steps a tiny world itself: what the
-parts left to link loads from the cache. Run as ``python -m sandmod.jobs.warmup
-PART``, this module compiles one part.
+fraction of a second. The cell update's phases are compiled each on its own and
+inlined by LLVM (:mod:`sandmod.engine.compiletime`), so :func:`compile_kernels`
+compiles them side by side, each subtree of them (:data:`PARTS`) in a process
+of its own, as many at once as there are CPUs, each part once those whose
+functions it calls are cached, then steps a tiny world itself, linking what
+they compiled: no function is compiled by two processes. Run as ``python -m
+sandmod.jobs.warmup PART``, this module compiles one part.
 
 Compiled only when a run needs it: the kernel that updates tiles on several
 threads at once (:func:`compile_parallel`), for worlds large enough to use
@@ -25,10 +26,24 @@ from typing import Callable
 
 import numpy as np
 
-#: The parts compiled side by side, longest first, then those a first frame needs.
-PARTS = ("cells with the fast loop", "cells without it", "heat", "pixels", "blasts", "taps and sprays", "neighbour rules")
+#: The parts compiled side by side, each in a process of its own, and the parts each waits for. The
+#: cell update's phases are compiled once each and cached (:data:`sandmod.engine.jit.inlined`): a part
+#: that calls them loads them from the cache once the parts that compile them are done, so that two
+#: processes do not compile the same function. In the order they start when their turn comes: the
+#: longest chain first.
+PARTS = {
+    "moves": (),  # moves.move and everything it calls
+    "fast loop": (),  # kernel._fast_cells: it calls a few of the moves (slumps, knocks), compiled here too if not yet cached
+    "phases": (),  # heat and fire, lifetime, reactions, and heat's conduction
+    "cells with the fast loop": ("moves", "fast loop", "phases"),  # the cell update, linking the above
+    "cells without it": ("moves", "phases"),
+    "pixels": (),
+    "blasts": (),
+    "taps and sprays": (),
+    "neighbour rules": (),
+}
 #: The parts a step of a world links together (the rest are called on their own).
-STEP_NEEDS = PARTS[:3]
+STEP_NEEDS = ("moves", "fast loop", "phases", "cells with the fast loop", "cells without it")
 
 
 def _tiny_world():
@@ -39,17 +54,49 @@ def _tiny_world():
     return World(load_ruleset(), CHUNK, CHUNK)
 
 
+def phase_signatures(world) -> dict:
+    """The phases of the cell update and the update itself, each with the types its caller hands it
+    (as :func:`sandmod.engine.kernel.step_region` or ``_update_tile`` calls it): compiled for these, each is found in the
+    cache when the cell update compiles. (A type that differs costs a compile, not a wrong result:
+    the update compiles the phase for its own types; ``tests/test_compiletime.py`` checks they agree.)"""
+    from numba import typeof, types
+
+    from ..engine import fire, heat, kernel, moves, reactions
+
+    s, t = world.state, world.tables
+    S, T, i, yes = typeof(s), typeof(t), types.int64, types.boolean
+    e, ambient, box = typeof(s.cells[0, 0]), typeof(t.temp_start[0]), types.UniTuple(types.int64, 4)
+    counts = typeof(world._detonations)
+    signatures = {
+        moves.move: (S, T, i, i, e, i, i, i, i, i, yes, i, i, i, i, i, ambient),
+        fire.heat_and_fire: (S, T, i, i, e, i, i, counts, i),
+        reactions.lifetime: (S, T, i, i, e, i),
+        reactions.react: (S, T, i, i, e, i, i, i, i),
+        kernel._fast_cells: (S, T, i, i, i, i, yes, i, i, i, ambient, i, i, i, i, i, box, box),
+        heat.conduct: (S, T, i, typeof(world.awake), typeof(world._woken), typeof(world._even), typeof(world._stirred), i, i, i, i),
+    }
+    region = (S, T, i, i, i, i, typeof(world.awake), typeof(world._woken), typeof(world._stirred), counts, i, i, i, i, i, i, typeof(world._seen))
+    return signatures | {kernel.step_region_fast: region, kernel.step_region_full: region}
+
+
 def compile_part(part: str) -> None:
-    """Compile one of :data:`PARTS` (into the cache), by calling it on a tiny world."""
-    from ..engine import kernel
+    """Compile one of :data:`PARTS` (into the cache): the phases for their callers' types, the rest by
+    calling them on a tiny world."""
+    from ..engine import fire, heat, kernel, moves, reactions
 
     world = _tiny_world()
     s, t = world.state, world.tables
-    if part in PARTS[:2]:
-        region = kernel.step_region_fast if part == PARTS[0] else kernel.step_region_full
-        region(s, t, 1, 2, 3, 0, world.awake, world._woken, world._stirred, world._detonations, 0, 0, 0, 4, 4, 0, world._seen)
-    elif part == "heat":
-        kernel.conduct(s, t, 0, world.awake, world._woken, world._even, world._stirred, 0, 0, 4, 4)
+    functions = {
+        "moves": [moves.move],
+        "fast loop": [kernel._fast_cells],
+        "phases": [fire.heat_and_fire, reactions.lifetime, reactions.react, heat.conduct],
+        "cells with the fast loop": [kernel.step_region_fast],
+        "cells without it": [kernel.step_region_full],
+    }
+    if part in functions:
+        signatures = phase_signatures(world)
+        for function in functions[part]:
+            function.compile(signatures[function])
     elif part == "blasts":
         world._explode(kernel.take_detonations(s, t, world._detonations), 0)
     elif part == "taps and sprays":
@@ -89,8 +136,9 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
         _compile_parts(lambda done: say(f"compiling the kernel: {done} of {len(PARTS)} parts done, {time.perf_counter() - started:.0f} s"), put_together)
     else:
         world.step()
-    for part in PARTS[2:]:  # in the cache by now: loaded, not compiled
-        compile_part(part)
+    for part in PARTS:  # in the cache by now: loaded, not compiled
+        if part not in STEP_NEEDS:
+            compile_part(part)
     kernelcache.mark_compiled()
     return time.perf_counter() - started
 
@@ -138,8 +186,10 @@ def _cached(function: str) -> bool:
 
 
 def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[], object]) -> None:
-    """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs; call
-    ``once_stepped`` as soon as those a step needs (:data:`STEP_NEEDS`) are done, while the others compile."""
+    """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs, each once
+    the parts it waits for are done; call ``once_stepped`` as soon as those a step needs
+    (:data:`STEP_NEEDS`) are done, while the others compile (one process fewer meanwhile: it
+    compiles too)."""
     waiting = list(PARTS)
     running: dict[subprocess.Popen, str] = {}
     finished: set[str] = set()
@@ -147,18 +197,22 @@ def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[],
     env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
     try:
         while waiting or running:
-            while waiting and len(running) < most:
-                part = waiting.pop(0)
+            stepping = once_stepped is not None and finished.issuperset(STEP_NEEDS)  # this process is about to compile too
+            ready = [part for part in waiting if finished.issuperset(PARTS[part])]
+            while ready and len(running) < max(1, most - stepping):
+                part = ready.pop(0)
+                waiting.remove(part)
                 command = [sys.executable, "-m", "sandmod.jobs.warmup", part]
                 # What fails here fails again, and says why, when this process compiles it itself.
                 running[subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)] = part
+            if stepping:
+                once_stepped()  # while the parts just started compile
+                once_stepped = None
+                continue
             time.sleep(0.05)
             for process in [p for p in running if p.poll() is not None]:
                 finished.add(running.pop(process))
                 progress(len(finished))
-                if finished >= set(STEP_NEEDS) and once_stepped is not None:
-                    once_stepped()
-                    once_stepped = None
     finally:
         for process in running:
             process.kill()
