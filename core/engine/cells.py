@@ -159,7 +159,8 @@ def become(s, t, x, y, into, temperature, flags, roll):
 @inlined
 def swap(s, x, y, px, py, carries):
     """The mover at (x, y) and the cell at (px, py) trade places: element, shade, timer, heat, and
-    what they hold where ``carries`` (either's element can hold: ``Tables.remembers``).
+    what they hold where ``carries`` (a particle's cargo; where a powder, liquid or gas can hold,
+    ``Tables.movers_hold``, either cell's).
 
     The cell left behind takes the other's velocity and flag bits; traded up or
     down, or into an empty cell, it is done for the frame, but traded sideways a
