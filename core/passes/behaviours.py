@@ -44,7 +44,7 @@ _GIVEN: dict[str, list[Callable]] = {}
 #: Each pass compiled (or loaded) in this process, by its key.
 _LOADED: dict[str, Callable] = {}
 #: The files whose code a pass is compiled from, besides the behaviours'.
-_OWN = [Path(__file__).parent / name for name in ("generated.py", "helpers.py")] + [Path(__file__).parent.parent / "formats" / "behaviour.py"]
+_OWN = [Path(__file__).parent / name for name in ("generated.py", "helpers.py", "visit.py")] + [Path(__file__).parent.parent / "formats" / "behaviour.py"]
 
 
 def functions_for(key: str) -> list[Callable]:

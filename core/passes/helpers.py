@@ -17,8 +17,9 @@ import numpy as np
 
 from ..engine import hashing
 from ..engine.jit import njit
-from ..engine.layout import CHUNK_SHIFT, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, TEMP_ONE, WAKE_MARGIN, WHOLE
+from ..engine.layout import CHUNK_SHIFT, LOOSE, MAX_TEMPERATURE, MIN_TEMPERATURE, MOVED, TEMP_ONE
 from ..formats import behaviour as api
+from .visit import wake_around
 from numba.extending import overload
 
 _mix32 = njit(hashing.mix32)
@@ -52,10 +53,7 @@ def _touched(v, x, y, was):
     to be checked again (2) if it was one."""
     v.stamp[y, x] = np.uint32((v.frame + 1) & 0xFFFFFFFF)
     height, width = v.cells.shape
-    for qy in (max(y - WAKE_MARGIN, 0), min(y + WAKE_MARGIN, height - 1)):
-        for qx in (max(x - WAKE_MARGIN, 0), min(x + WAKE_MARGIN, width - 1)):
-            v.awake[qy >> CHUNK_SHIFT, qx >> CHUNK_SHIFT] = WHOLE
-            v.even[qy >> CHUNK_SHIFT, qx >> CHUNK_SHIFT] = 0
+    wake_around(v.awake, v.even, x, y, width, height)
     cy, cx = y >> CHUNK_SHIFT, x >> CHUNK_SHIFT
     if v.codes[was] != 0:
         v.held[cy, cx] = 2
