@@ -283,10 +283,11 @@ def render_peak_memory(size: int, frames: int = 4, output_format: str = "gif") -
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
         spec, _ = read_world_spec(world)
     from ..formats.limits import WORLD_BYTES_PER_CELL
+    from .render import DRAWN_BYTES_PER_PIXEL
 
     budget = MemoryBudget(None)
     budget.take(spec.world.width * spec.world.height * WORLD_BYTES_PER_CELL, "the world")
-    budget.take(4 * size * size, "the frame")
+    budget.take(DRAWN_BYTES_PER_PIXEL * size * size, "the frame")  # as a render's check takes it (render.kept_bytes; a GIF keeps none)
     return MemoryResult(size, size, frames, output_format, round(float(done.stdout.split()[-1]), 1), round(budget.used / 2**20, 1))
 
 

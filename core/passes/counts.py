@@ -63,8 +63,8 @@ def _apply(s, t, start, stop, counted, counts, where, into, chance, tiles, key, 
     cells = s.cells
     height, width = cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
-    changes = np.empty((len(tiles) * TILE * TILE, 3), np.int64)
-    n = 0
+    changes = [(np.int64(0), np.int64(0), np.int64(0))]  # as many as there are: a tile's worth each would be 96 kB
+    changes.pop()
     for tile in tiles:
         x0, y0 = (tile % tiles_x) << TILE_SHIFT, (tile // tiles_x) << TILE_SHIFT
         for y in range(y0, min(y0 + TILE, height)):
@@ -75,11 +75,9 @@ def _apply(s, t, start, stop, counted, counts, where, into, chance, tiles, key, 
                 if becomes == -2:
                     wake_around(awake, even, x, y, width, height)  # it may fire next frame
                 elif becomes >= 0 and becomes != cells[y, x]:
-                    changes[n, 0], changes[n, 1], changes[n, 2] = x, y, becomes
-                    n += 1
-    for k in range(n):  # together, once every cell is decided
-        x, y, becomes = changes[k, 0], changes[k, 1], changes[k, 2]
+                    changes.append((np.int64(x), np.int64(y), becomes))
+    for x, y, becomes in changes:  # together, once every cell is decided
         warmth = _temperature(int(s.heat[y, x]), t.heat_recip[cells[y, x]])
         become(s, t, x, y, becomes, warmth, LOOSE, _cell_key(key, x, y))
         wake_around(awake, even, x, y, width, height)
-    return n
+    return len(changes)

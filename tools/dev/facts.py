@@ -102,13 +102,13 @@ def _elements(ruleset) -> dict[str, object]:
 def _limits() -> dict[str, object]:
     """What files, worlds, renders and sweeps may hold, and what memory they are estimated to take."""
     from sandmod.formats import limits, sweepspec, userfiles, worldspec
-    from sandmod.jobs import session
+    from sandmod.jobs import render as render_job, session
     from sandmod.jobs.batch import sheet
     from sandmod.plugins import gif
     from sandmod.registry import collect, make_plugin_manager
 
     recorder = collect(make_plugin_manager(entry_points=False)).recorder_for
-    cell = limits.WORLD_BYTES_PER_CELL + 4  # a render at scale 1 draws a 4-byte pixel a cell (as `bench --memory`)
+    cell = limits.WORLD_BYTES_PER_CELL + render_job.DRAWN_BYTES_PER_PIXEL  # a render at scale 1 draws a pixel a cell (as `bench --memory`)
     estimate = lambda side: f"{(limits.BASELINE_BYTES + cell * side**2) / 2**30:.3g}"  # noqa: E731
     refusal = re.search(r"about ([\d.]+) GB of memory, ([\d.]+) GB in all: more than the limit of ([\d.]+) GB",
                         limits.MemoryBudget().take(limits.WORLD_BYTES_PER_CELL * worldspec.MAX_SIZE**2, "a world"))
