@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -149,38 +150,75 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
 
     for name in ("step", "take_detonations", "explode", "conduct"):
         monkeypatch.setattr(kernel, name, getattr(Recording(), name))
-    monkeypatch.setattr(warmup, "_compile_parts", lambda progress, stepped: (called.append("parts"), stepped()))  # no processes
+    monkeypatch.setattr(warmup, "_Worker", Worker := _FakeWorker.recording([]))  # no processes
     assert not kernelcache.is_compiled()
     compile_kernels(ruleset)
-    assert called == ["parts", "step", "take_detonations", "explode"]  # conduct: compiled by a part, linked by the step
+    assert sorted(Worker.events) == sorted(("compile", part) for part in warmup.PARTS)
+    assert called == ["step", "take_detonations", "explode"]  # conduct: compiled by a part, linked by the step
     assert kernelcache.is_compiled()
 
 
-def test_warmup_starts_each_part_once_those_it_calls_are_done_and_steps_when_the_step_can(monkeypatch):
+class _FakeWorker:
+    """Stands in for a worker process: says each part compiled at once, and records what it was asked."""
+
+    events: list
+
+    @classmethod
+    def recording(cls, events):
+        return type("Worker", (cls,), {"events": events})
+
+    def compile(self, part):
+        self.events.append(("compile", part))
+        return part not in getattr(self, "failing", ())
+
+    def close(self):
+        pass
+
+
+def test_warmup_starts_each_part_once_those_it_calls_are_done_and_steps_when_the_step_can():
     events = []
-
-    class Part:  # a process that is done the first time it is asked
-        def __init__(self, command, **kwargs):
-            self.part = command[-1]
-            events.append(("start", self.part))
-
-        def poll(self):
-            events.append(("done", self.part))
-            return 0
-
-        def kill(self):
-            raise AssertionError("nothing is left running")
-
-    monkeypatch.setattr(warmup.subprocess, "Popen", Part)
-    monkeypatch.setattr(warmup.time, "sleep", lambda seconds: None)
-    warmup._compile_parts(lambda done: None, lambda: events.append(("step", None)))
-    started = [part for event, part in events if event == "start"]
+    Worker = _FakeWorker.recording(events)
+    compiling = warmup._Compiling(lambda done: None, warmup.PARTS, worker=Worker)
+    with compiling.here_after(warmup.STEP_NEEDS):
+        events.append(("step", None))
+    compiling.join()
+    started = [part for event, part in events if event == "compile"]
     assert sorted(started) == sorted(warmup.PARTS)  # each once
     for part, needs in warmup.PARTS.items():
-        assert set(needs) <= set(warmup.PARTS) and all(events.index(("done", need)) < events.index(("start", part)) for need in needs)
+        assert set(needs) <= set(warmup.PARTS) and all(events.index(("compile", need)) < events.index(("compile", part)) for need in needs)
     assert set(warmup.STEP_NEEDS) <= set(warmup.PARTS)
-    assert all(events.index(("done", part)) < events.index(("step", None)) for part in warmup.STEP_NEEDS)
-    assert events.count(("step", None)) == 1
+    assert all(events.index(("compile", part)) < events.index(("step", None)) for part in warmup.STEP_NEEDS)
+    assert compiling.done() and compiling.succeeded()
+
+
+def test_a_first_frame_waits_only_for_the_parts_its_world_uses_and_the_rest_finish_before_the_command_exits(ruleset, tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # not compiled yet
+    world = World(ruleset, 64, 64)
+    later = warmup.unused_at_first(world)
+    assert "taps and sprays" in later and "blasts" not in later  # the bundled rules have explosives
+    events, release = [], threading.Event()
+
+    class Slow(_FakeWorker.recording(events)):
+        def compile(self, part):
+            if part in later:
+                release.wait(10)  # still compiling when the first frame may start
+            return super().compile(part)
+
+    monkeypatch.setattr(warmup, "_Worker", Slow)
+    compile_kernels(ruleset, first_frame_of=world)
+    assert not kernelcache.is_compiled() and warmup._LATER  # the first frame need not wait
+    assert {part for _, part in events} >= set(warmup.PARTS) - set(later)
+    release.set()
+    warmup.finish_later()
+    assert kernelcache.is_compiled() and not warmup._LATER and sorted(part for _, part in events) == sorted(warmup.PARTS)
+
+
+def test_a_part_that_failed_leaves_the_version_not_compiled(ruleset, tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    Failing = type("Failing", (_FakeWorker.recording([]),), {"failing": ("neighbour rules",)})
+    compiling = warmup._Compiling(lambda done: None, warmup.PARTS, worker=Failing)
+    compiling.join()
+    assert compiling.done() and not compiling.succeeded()
 
 
 def test_warmup_compiles_for_one_thread_and_several_and_says_where(tmp_path, monkeypatch):

@@ -29,7 +29,13 @@ class _Group(click.Group):
 
     def invoke(self, ctx: click.Context):
         try:
-            return super().invoke(ctx)
+            try:
+                return super().invoke(ctx)
+            except KeyboardInterrupt:
+                _stop_compiling()
+                raise
+            finally:
+                _finish_compiling()
         except ProblemsError as exc:
             for problem in exc.problems:
                 click.echo(str(problem), err=True)
@@ -37,6 +43,19 @@ class _Group(click.Group):
         except KeyboardInterrupt:  # Ctrl-C: what was being written is gone, and a shell's status says so
             click.echo("interrupted", err=True)
             ctx.exit(EXIT_INTERRUPTED)
+
+
+def _finish_compiling() -> None:
+    """Wait for the kernel's parts a command left compiling while it ran (see compile_kernels), if any."""
+    warmup = sys.modules.get("sandmod.jobs.warmup")
+    if warmup is not None:
+        warmup.finish_later()
+
+
+def _stop_compiling() -> None:
+    warmup = sys.modules.get("sandmod.jobs.warmup")
+    if warmup is not None:
+        warmup.abandon_later()
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -184,7 +203,7 @@ def render(world, output, format_name, frames, every, seed, scale, fps, loop, cr
     refused = render_problems(recorder, loaded.world, framing, frames, every, loaded.memory)
     if refused:
         raise ProblemsError([Problem(display_path(output), None, "", message) for message in refused])
-    compile_new_kernels(loaded.world.ruleset, announce=None if quiet else _say)
+    compile_new_kernels(loaded.world.ruleset, announce=None if quiet else _say, first_frame_of=loaded.world)
     compile_parallel(loaded.world, announce=None if quiet else _say)
     started = time.perf_counter()
     options = dict(
@@ -882,7 +901,7 @@ def play(world, size, scale, benchmark_frames, save_session, mod_dirs) -> None:
     if world is not None and size is not None:
         raise click.UsageError("--size sizes a new world; a world file has its own size")
     session = Session.open(world, size=size or ((512, 384) if benchmark_frames and world is None else None), mod_dirs=_mod_folders(mod_dirs))
-    compile_new_kernels(session.world.ruleset, announce=_say)
+    compile_new_kernels(session.world.ruleset, announce=_say, first_frame_of=session.world)
     compile_parallel(session.world, announce=_say)  # before the window opens, not in its first frames
     if benchmark_frames:
         click.echo(json.dumps(window.benchmark(session, scale, benchmark_frames, busy=world is None)))

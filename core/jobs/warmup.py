@@ -1,15 +1,18 @@
-"""Compiling the kernels before a run needs them: their parts side by side, one process each,
+"""Compiling the kernels before a run needs them: their parts side by side, in worker processes,
 saying on the terminal how far along it is.
 
 numba compiles a function when it is first called, and caches what it
 compiled on disk (:mod:`sandmod.engine.kernelcache`); a later process loads it in a
 fraction of a second. The cell update's phases are compiled each on its own and
-inlined by LLVM (:mod:`sandmod.engine.compiletime`), so :func:`compile_kernels`
-compiles them side by side, each subtree of them (:data:`PARTS`) in a process
-of its own, as many at once as there are CPUs, each part once those whose
-functions it calls are cached, then steps a tiny world itself, linking what
-they compiled: no function is compiled by two processes. Run as ``python -m
-sandmod.jobs.warmup PART``, this module compiles one part.
+inlined by LLVM, and its two versions compiled each on its own and called by name
+(:mod:`sandmod.engine.compiletime`), so :func:`compile_kernels` compiles them side
+by side, each subtree of them (:data:`PARTS`) handed to one of as many worker
+processes as there are CPUs (``python -m sandmod.jobs.warmup --serve``), each part
+once those whose functions it calls are cached, then steps a tiny world itself,
+linking what they compiled: no function is compiled by two processes. Given the
+world a command is about to run, it returns once that world's first frame can be
+drawn, the parts it does not use at first still compiling (:func:`finish_later`).
+Run as ``python -m sandmod.jobs.warmup PART``, this module compiles one part.
 
 Compiled only when a run needs it: the kernel that updates tiles on several
 threads at once (:func:`compile_parallel`), for worlds large enough to use
@@ -18,15 +21,17 @@ more than one.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
+import threading
 import time
 from typing import Callable
 
 import numpy as np
 
-#: The parts compiled side by side, each in a process of its own, and the parts each waits for. The
+#: The parts compiled side by side, in worker processes, and the parts each waits for. The
 #: cell update's phases are compiled once each and cached (:data:`sandmod.engine.jit.inlined`): a part
 #: that calls them loads them from the cache once the parts that compile them are done, so that two
 #: processes do not compile the same function. In the order they start when their turn comes: the
@@ -35,7 +40,7 @@ PARTS = {
     "moves": (),  # moves.move and everything it calls
     "fast loop": (),  # kernel._fast_cells: it calls a few of the moves (slumps, knocks), compiled here too if not yet cached
     "phases": (),  # heat and fire, lifetime, reactions, and heat's conduction
-    "cells with the fast loop": ("moves", "fast loop", "phases"),  # the cell update, linking the above
+    "cells with the fast loop": ("moves", "fast loop", "phases"),  # the cell update, in full: the step calls it by name
     "cells without it": ("moves", "phases"),
     "pixels": (),
     "blasts": (),
@@ -44,6 +49,8 @@ PARTS = {
 }
 #: The parts a step of a world links together (the rest are called on their own).
 STEP_NEEDS = ("moves", "fast loop", "phases", "cells with the fast loop", "cells without it")
+#: The parts a world may not use as it starts: they may go on compiling while it runs (:func:`unused_at_first`).
+LATER = ("blasts", "taps and sprays", "neighbour rules")
 
 
 def _tiny_world():
@@ -112,14 +119,17 @@ def compile_part(part: str) -> None:
         raise ValueError(f"no part {part!r}")
 
 
-def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = None) -> float:
+def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = None, *, first_frame_of=None) -> float:
     """Compile (or load from the cache) every kernel a world on one thread uses: the
     :data:`PARTS` side by side in processes of their own, then a step of a tiny world of
     ``ruleset`` (default: the bundled mods') here; then note this version as compiled
     (:mod:`sandmod.engine.kernelcache`). ``announce`` hears how far along it is. Returns the seconds.
 
     A world compiles each kernel when it first needs it, so without this the first
-    explosion after a new version would stop a render for a while, unannounced.
+    explosion after a new version would stop a render for a while, unannounced. Given a
+    world, ``first_frame_of``, it returns once that world's first frame can be drawn: the parts
+    it does not use at first (:func:`unused_at_first`) go on compiling meanwhile, and
+    :func:`finish_later` waits for them (the command line does, as it exits).
     """
     from ..engine import kernelcache
 
@@ -127,15 +137,23 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
     say = announce or (lambda line: None)
     world = _tiny_world() if ruleset is None else _world_of(ruleset)
     world.threads = 1
-
-    def put_together() -> None:  # a step links the cells' parts and heat: here, while the rest compile
-        say("compiling the kernel: putting the parts together...")
+    if kernelcache.is_compiled():
         world.step()
-
-    if not kernelcache.is_compiled():
-        _compile_parts(lambda done: say(f"compiling the kernel: {done} of {len(PARTS)} parts done, {time.perf_counter() - started:.0f} s"), put_together)
     else:
-        world.step()
+        later = () if first_frame_of is None else unused_at_first(first_frame_of)
+        first = [part for part in PARTS if part not in later]
+        compiling = _Compiling(lambda done: say(f"compiling the kernel: {done} of {len(first)} parts done, {time.perf_counter() - started:.0f} s"), first)
+        try:
+            with compiling.here_after(STEP_NEEDS):  # a step links the cells' parts and heat: here, while the rest compile
+                say("compiling the kernel: putting the parts together...")
+                world.step()
+            compiling.wait_for(first)
+        except BaseException:
+            compiling.stop()
+            raise
+        if not compiling.done():
+            _LATER.append((compiling, announce))
+            return time.perf_counter() - started
     for part in PARTS:  # in the cache by now: loaded, not compiled
         if part not in STEP_NEEDS:
             compile_part(part)
@@ -143,7 +161,43 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
     return time.perf_counter() - started
 
 
-def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None = None) -> None:
+def unused_at_first(world) -> tuple[str, ...]:
+    """The parts of :data:`LATER` that ``world`` does not use as it starts: no explosive in its rules
+    and none set off by its file, no sprays, no neighbour rules. (A player may paint an explosive
+    later: then the blasts compile as it goes off, if they have not yet.)"""
+    used = {
+        "blasts": bool(world.scheduled) or bool(world.tables.blast.any()),
+        "taps and sprays": bool(world.sprays),
+        "neighbour rules": world.ruleset.neighbours is not None,
+    }
+    return tuple(part for part in LATER if not used[part])
+
+
+#: The kernels' parts still compiling after :func:`compile_kernels` returned (its ``first_frame_of``).
+_LATER: list[tuple[_Compiling, Callable[[str], object] | None]] = []
+
+
+def finish_later() -> None:
+    """Wait for the parts :func:`compile_kernels` left compiling (its ``first_frame_of``), saying so
+    to its ``announce`` if they are not done yet; then note this version as compiled, if they all were."""
+    from ..engine import kernelcache
+
+    while _LATER:
+        compiling, announce = _LATER.pop()
+        if not compiling.done() and announce is not None:
+            announce("compiling the kernel's other parts (explosions, taps, neighbour rules) for later runs...")
+        compiling.join()
+        if compiling.succeeded():
+            kernelcache.mark_compiled()
+
+
+def abandon_later() -> None:
+    """Stop the parts :func:`compile_kernels` left compiling: a later run compiles them."""
+    while _LATER:
+        _LATER.pop()[0].stop()
+
+
+def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None = None, *, first_frame_of=None) -> None:
     """:func:`compile_kernels` if this version's are not compiled yet, first handing
     ``announce`` (when given) the notice to show (:data:`sandmod.engine.kernelcache.NOTICE`), then
     how far along it is."""
@@ -153,7 +207,7 @@ def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None =
         return
     if announce is not None:
         announce(kernelcache.NOTICE)
-    compile_kernels(ruleset, announce)
+    compile_kernels(ruleset, announce, first_frame_of=first_frame_of)
 
 
 def compile_parallel(world=None, announce: Callable[[str], object] | None = None) -> None:
@@ -185,39 +239,139 @@ def _cached(function: str) -> bool:
     return any(kernel_cache_dir().rglob(f"kernel.{function}-*.nbi"))
 
 
-def _compile_parts(progress: Callable[[int], object], once_stepped: Callable[[], object]) -> None:
-    """Compile :data:`PARTS` in processes of their own, as many at once as there are CPUs, each once
-    the parts it waits for are done; call ``once_stepped`` as soon as those a step needs
-    (:data:`STEP_NEEDS`) are done, while the others compile (one process fewer meanwhile: it
-    compiles too)."""
-    waiting = list(PARTS)
-    running: dict[subprocess.Popen, str] = {}
-    finished: set[str] = set()
-    most = max(1, min(os.cpu_count() or 1, len(PARTS)))
-    env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
-    try:
-        while waiting or running:
-            stepping = once_stepped is not None and finished.issuperset(STEP_NEEDS)  # this process is about to compile too
-            ready = [part for part in waiting if finished.issuperset(PARTS[part])]
-            while ready and len(running) < max(1, most - stepping):
-                part = ready.pop(0)
-                waiting.remove(part)
-                command = [sys.executable, "-m", "sandmod.jobs.warmup", part]
-                # What fails here fails again, and says why, when this process compiles it itself.
-                running[subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)] = part
-            if stepping:
-                once_stepped()  # while the parts just started compile
-                once_stepped = None
-                continue
-            time.sleep(0.05)
-            for process in [p for p in running if p.poll() is not None]:
-                finished.add(running.pop(process))
-                progress(len(finished))
-    finally:
-        for process in running:
-            process.kill()
-    if once_stepped is not None:
-        once_stepped()
+class _Worker:
+    """A process of its own that compiles parts, one after another, as it is told (``python -m
+    sandmod.jobs.warmup --serve``): one start-up for many parts."""
+
+    def __init__(self) -> None:
+        command = [sys.executable, "-m", "sandmod.jobs.warmup", "--serve"]
+        env = os.environ | {"NUMBA_CACHE_DIR": str(_cache_dir())}
+        # What fails there fails again, and says why, when this process compiles it itself.
+        self._process = subprocess.Popen(command, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+
+    def compile(self, part: str) -> bool:
+        """Compile ``part`` there; whether it did."""
+        try:
+            self._process.stdin.write(part + "\n")
+            self._process.stdin.flush()
+        except OSError:  # it is gone
+            return False
+        return self._process.stdout.readline() == f"compiled {part}\n"
+
+    def close(self) -> None:
+        self._process.kill()
+        self._process.wait()
+
+
+def _serve() -> None:
+    """Compile each part named on stdin, one a line, and say on stdout when each is done."""
+    for line in sys.stdin:
+        part = line.strip()
+        try:
+            compile_part(part)
+        except Exception:  # noqa: BLE001  (its caller compiles it again itself, and says why)
+            print(f"failed {part}", flush=True)
+        else:
+            print(f"compiled {part}", flush=True)
+
+
+class _Compiling:
+    """:data:`PARTS` compiling in :class:`_Worker` processes, as many at once as there are CPUs (one
+    fewer while this process compiles too: :meth:`here_after`), each part once those it waits for are
+    done, the parts of ``told`` first. ``progress`` hears how many of ``told`` are done, each time
+    one of them is."""
+
+    def __init__(self, progress: Callable[[int], object], told, worker: Callable[[], _Worker] | None = None) -> None:
+        self._progress, self._told, self._worker = progress, set(told), worker or _Worker
+        self._most = max(1, min(os.cpu_count() or 1, len(PARTS)))
+        self._waiting = list(PARTS)
+        self._finished: dict[str, bool] = {}  # whether each part compiled
+        self._compiling = 0
+        self._here_after: set[str] | None = None  # this process compiles once these are done (here_after)
+        self._stopping = False
+        self._workers: list[_Worker] = []
+        self._changed = threading.Condition()
+        self._threads = [threading.Thread(target=self._work, name="sandmod compiling", daemon=True) for _ in range(self._most)]
+        for thread in self._threads:
+            thread.start()
+
+    def _next(self) -> str | None:
+        """A part to compile now, once there is one (under the lock); None: no more."""
+        while not self._stopping and self._waiting:
+            ready = [part for part in self._waiting if self._finished.keys() >= set(PARTS[part])]
+            if self._told & set(self._waiting):  # those waited for first
+                ready = [part for part in ready if part in self._told]
+            here = self._here_after is not None and self._finished.keys() >= self._here_after
+            if ready and self._compiling < max(1, self._most - here):
+                self._waiting.remove(ready[0])
+                self._compiling += 1
+                return ready[0]
+            self._changed.wait()
+        return None
+
+    def _work(self) -> None:
+        worker = None
+        try:
+            while True:
+                with self._changed:
+                    part = self._next()
+                    if part is None:
+                        return
+                    if worker is None:
+                        worker = self._worker()
+                        self._workers.append(worker)
+                compiled = worker.compile(part)
+                with self._changed:
+                    self._finished[part] = compiled
+                    self._compiling -= 1
+                    self._changed.notify_all()
+                if part in self._told:
+                    self._progress(len(self._told & self._finished.keys()))
+        finally:
+            if worker is not None:
+                worker.close()
+            with self._changed:
+                self._changed.notify_all()
+
+    def wait_for(self, parts) -> None:
+        """Wait until ``parts`` are done (or none will be)."""
+        with self._changed:
+            self._changed.wait_for(lambda: self.done() or self._finished.keys() >= set(parts))
+
+    @contextlib.contextmanager
+    def here_after(self, parts):
+        """Wait for ``parts``, then compile in this process too: one process fewer from the moment they are done."""
+        with self._changed:
+            self._here_after = set(parts)
+            self._changed.wait_for(lambda: self.done() or self._finished.keys() >= self._here_after)
+        try:
+            yield
+        finally:
+            with self._changed:
+                self._here_after = None
+                self._changed.notify_all()
+
+    def done(self) -> bool:
+        """Whether none is compiling or will be."""
+        return not any(thread.is_alive() for thread in self._threads)
+
+    def succeeded(self) -> bool:
+        """Whether every part compiled."""
+        return self._finished.keys() == PARTS.keys() and all(self._finished.values())
+
+    def join(self) -> None:
+        for thread in self._threads:
+            thread.join()
+
+    def stop(self) -> None:
+        """Stop the parts compiling and start no more."""
+        with self._changed:
+            self._stopping = True
+            self._changed.notify_all()
+            workers = list(self._workers)
+        for worker in workers:
+            worker.close()
+        self.join()
 
 
 def _cache_dir():
@@ -227,4 +381,4 @@ def _cache_dir():
 
 
 if __name__ == "__main__":
-    compile_part(sys.argv[1])
+    _serve() if sys.argv[1:] == ["--serve"] else compile_part(sys.argv[1])
