@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -152,10 +153,12 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
         monkeypatch.setattr(kernel, name, getattr(Recording(), name))
     monkeypatch.setattr(warmup, "_Worker", Worker := _FakeWorker.recording([]))  # no processes
     assert not kernelcache.is_compiled()
-    compile_kernels(ruleset)
+    said = []
+    compile_kernels(ruleset, announce=lambda line: (time.sleep(0.02), said.append(line)))  # slow to say it, as a terminal may be
     assert sorted(Worker.events) == sorted(("compile", part) for part in warmup.PARTS)
     assert called == ["step", "take_detonations", "explode"]  # conduct: compiled by a part, linked by the step
-    assert kernelcache.is_compiled()
+    assert kernelcache.is_compiled() and not warmup._LATER  # all of it done as it returns, nothing left for later
+    assert any(line.startswith(f"compiling the kernel: {len(warmup.PARTS)} of {len(warmup.PARTS)} parts done") for line in said)
 
 
 class _FakeWorker:
@@ -201,7 +204,7 @@ def test_a_first_frame_waits_only_for_the_parts_its_world_uses_and_the_rest_fini
     class Slow(_FakeWorker.recording(events)):
         def compile(self, part):
             if part in later:
-                release.wait(10)  # still compiling when the first frame may start
+                release.wait(300)  # still compiling when the first frame may start (a step may compile for a while here)
             return super().compile(part)
 
     monkeypatch.setattr(warmup, "_Worker", Slow)
@@ -234,6 +237,7 @@ def test_warmup_compiles_for_one_thread_and_several_and_says_where(tmp_path, mon
 
 def test_warmup_with_the_kernel_compiled_loads_it():
     warmup.compile_new_kernels()  # as the test session's start does, if it has not
+    warmup.compile_parallel()
     result = CliRunner().invoke(cli, ["warmup"])
     assert result.exit_code == 0 and result.stderr.startswith("already compiled: loaded in")
 

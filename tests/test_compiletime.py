@@ -158,7 +158,7 @@ def test_the_warmup_compiles_each_phase_for_the_types_the_kernel_calls_it_with()
 
 _CALLS_BY_NAME = '''
 import numpy as np
-from sandmod.engine.jit import called, compiled
+from sandmod.engine.jit import called, compiled, inlined
 
 @called
 def leaf(a, i):
@@ -167,12 +167,23 @@ def leaf(a, i):
         total += a[k] * k
     return total
 
+@inlined
+def middle(a, i):
+    return leaf(a, i) + 1
+
 @compiled
 def caller(a, i):
-    return leaf(a, i) - leaf(a, i + 1)
+    return leaf(a, i) - middle(a, i + 1)
+
+@compiled
+def later(a, i):
+    return middle(a, i)
 
 def main(first):
-    print(caller(np.arange(10, dtype=np.int64), 1))
+    a = np.arange(10, dtype=np.int64)
+    if not first:  # compiled now, before anything loads leaf: middle, from the cache, loads it
+        print(later(a, 1))
+    print(caller(a, 1))
     print(sum(caller.stats.cache_hits.values()), sum(leaf.stats.cache_hits.values()), sum(leaf.stats.cache_misses.values()))
     if first:  # compiled here: the caller's module declares leaf, defines none of it
         module = caller.overloads[caller.signatures[0]].library._final_module
@@ -182,10 +193,12 @@ def main(first):
 
 def test_a_function_called_by_name_is_compiled_once_and_a_cached_caller_loads_it_first(tmp_path):
     """A caller links in nothing of a function marked `called`: its module declares it, the loader finds
-    its machine code; from the cache, the caller has what it calls loaded before its own code."""
+    its machine code; from the cache, the caller has what it calls loaded before its own code, and so
+    does an inlined function that calls it, for a caller compiled later."""
     (tmp_path / "bynamed.py").write_text(_CALLS_BY_NAME)
     env = os.environ | {"NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": str(tmp_path)}
-    expected = sum(k * k for k in range(1, 10)) - sum(k * k for k in range(2, 10))
+    squares = sum(k * k for k in range(1, 10))
+    expected = squares - (squares - 1 + 1)
 
     def run(first):
         done = subprocess.run([sys.executable, "-c", f"import bynamed; bynamed.main({first})"], env=env, capture_output=True, text=True, timeout=300)
@@ -195,4 +208,4 @@ def test_a_function_called_by_name_is_compiled_once_and_a_cached_caller_loads_it
     first = run(True)
     assert first == [str(expected), "0 0 1", "[True]"]  # compiled, leaf once; declared in the caller, not defined there
     again = run(False)
-    assert again == [str(expected), "1 1 0"]  # both from the cache, leaf loaded for the caller's sake
+    assert again == [str(squares + 1), str(expected), "1 1 0"]  # leaf from the cache, loaded for middle's sake  # both from the cache, leaf loaded for the caller's sake

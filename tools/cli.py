@@ -804,7 +804,7 @@ def warmup(quiet) -> None:
         say(kernelcache.NOTICE)
     started = time.perf_counter()
     compile_kernels(announce=say)
-    compile_parallel(announce=say)
+    fresh = compile_parallel(announce=say) or fresh
     done = "compiled" if fresh else "already compiled: loaded"
     say(f"{done} in {time.perf_counter() - started:.1f} s, kept in {display_path(kernelcache.kernel_cache_dir())}")
 

@@ -338,7 +338,9 @@ def _call_marked_by_name() -> bool:
 
     def serialize_using_object_code(self):
         name, kind, (code, shared) = serialize(self)
-        called = {f.name for f in self._final_module.functions if f.is_declaration and f.name in _CALLED}
+        # What it calls, and what its callers link in calls (an inlined function's final module keeps none of its code).
+        modules = [self._final_module] + ([self._shared_module] if self._shared_module is not None else [])
+        called = {f.name for module in modules for f in module.functions if f.is_declaration and f.name in _CALLED}
         return name, kind, (code, shared, [_CALLED[name] for name in sorted(called)])
 
     def _unserialize(cls, codegen, state):

@@ -151,9 +151,10 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
         except BaseException:
             compiling.stop()
             raise
-        if not compiling.done():
+        if later and not compiling.done():
             _LATER.append((compiling, announce))
             return time.perf_counter() - started
+        compiling.join()
     for part in PARTS:  # in the cache by now: loaded, not compiled
         if part not in STEP_NEEDS:
             compile_part(part)
@@ -210,20 +211,22 @@ def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None =
     compile_kernels(ruleset, announce, first_frame_of=first_frame_of)
 
 
-def compile_parallel(world=None, announce: Callable[[str], object] | None = None) -> None:
+def compile_parallel(world=None, announce: Callable[[str], object] | None = None) -> bool:
     """Compile (or load) the kernel that updates a pass's tiles on several threads at once,
-    if ``world`` (any, if None) may step on several."""
+    if ``world`` (any, if None) may step on several; returns whether it compiled it (not cached yet)."""
     from ..engine.threads import MIN_TILES_A_PASS, available
 
     if available() < 2:
-        return
+        return False
     if world is not None and ((world.threads or 2) < 2 or len(world._detonations) // 4 < MIN_TILES_A_PASS):
-        return
-    if announce is not None and not _cached("step_at_once"):
+        return False
+    new = not _cached("step_at_once")
+    if announce is not None and new:
         announce("compiling the kernel for several threads (once per version, some seconds)...")
     tiny = _tiny_world()
     tiny.threads = 2
     tiny.step()
+    return new
 
 
 def _world_of(ruleset):
@@ -321,12 +324,12 @@ class _Compiling:
                         worker = self._worker()
                         self._workers.append(worker)
                 compiled = worker.compile(part)
-                with self._changed:
+                with self._changed:  # said before anyone waiting for it goes on
                     self._finished[part] = compiled
                     self._compiling -= 1
+                    if part in self._told:
+                        self._progress(len(self._told & self._finished.keys()))
                     self._changed.notify_all()
-                if part in self._told:
-                    self._progress(len(self._told & self._finished.keys()))
         finally:
             if worker is not None:
                 worker.close()
