@@ -4,9 +4,8 @@ saying on the terminal how far along it is.
 numba compiles a function when it is first called, and caches what it
 compiled on disk (:mod:`sandmod.engine.kernelcache`); a later process loads it in a
 fraction of a second. The cell update's phases are compiled each on its own and
-inlined by LLVM, and its two versions compiled each on its own and called by name
-(:mod:`sandmod.engine.compiletime`), so :func:`compile_kernels` compiles them side
-by side, each subtree of them (:data:`PARTS`) handed to one of as many worker
+inlined by LLVM (:mod:`sandmod.engine.compiletime`), so :func:`compile_kernels`
+compiles them side by side, each subtree of them (:data:`PARTS`) handed to one of as many worker
 processes as there are CPUs (``python -m sandmod.jobs.warmup --serve``), each part
 once those whose functions it calls are cached, then steps a tiny world itself,
 linking what they compiled: no function is compiled by two processes. Given the
@@ -40,7 +39,7 @@ PARTS = {
     "moves": (),  # moves.move and everything it calls
     "fast loop": (),  # kernel._fast_cells: it calls a few of the moves (slumps, knocks), compiled here too if not yet cached
     "phases": (),  # heat and fire, lifetime, reactions, and heat's conduction
-    "cells with the fast loop": ("moves", "fast loop", "phases"),  # the cell update, in full: the step calls it by name
+    "cells with the fast loop": ("moves", "fast loop", "phases"),  # the cell update, linking the above
     "cells without it": ("moves", "phases"),
     "pixels": (),
     "blasts": (),
