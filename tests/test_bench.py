@@ -136,6 +136,10 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
             called.append("step")
             return 0
 
+        def step_soon(self, *args):
+            called.append("step_soon")
+            return 0
+
         def take_detonations(self, *args):
             called.append("take_detonations")
             return np.zeros((0, BLAST_COLUMNS), np.int64)
@@ -149,14 +153,18 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
     from sandmod.engine import kernel
 
-    for name in ("step", "take_detonations", "explode", "conduct"):
+    from sandmod.world import world as world_module
+
+    for name in ("step", "step_soon", "take_detonations", "explode", "conduct"):
         monkeypatch.setattr(kernel, name, getattr(Recording(), name))
+    monkeypatch.setattr(world_module, "_STEP_COMPILED", False)  # as in a first run's process
     monkeypatch.setattr(warmup, "_Worker", Worker := _FakeWorker.recording([]))  # no processes
     assert not kernelcache.is_compiled()
     said = []
     compile_kernels(ruleset, announce=lambda line: (time.sleep(0.02), said.append(line)))  # slow to say it, as a terminal may be
     assert sorted(Worker.events) == sorted(("compile", part) for part in warmup.PARTS)
-    assert called == ["step", "take_detonations", "explode"]  # conduct: compiled by a part, linked by the step
+    # The quick step here (conduct: compiled by a part, linked by it), then the best step loaded, and the blasts'.
+    assert called == ["step_soon", "step", "take_detonations", "explode"]
     assert kernelcache.is_compiled() and not warmup._LATER  # all of it done as it returns, nothing left for later
     assert any(line.startswith(f"compiling the kernel: {len(warmup.PARTS)} of {len(warmup.PARTS)} parts done") for line in said)
 

@@ -4,6 +4,10 @@ and the functions marked to be inlined are inlined by LLVM, with no machine code
 That they change nothing the kernel computes is test_golden's to show (its frames, bit for bit).
 """
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from numba import njit
@@ -150,3 +154,58 @@ def test_the_warmup_compiles_each_phase_for_the_types_the_kernel_calls_it_with()
     for function, signature in warmup.phase_signatures(warmup._tiny_world()).items():
         compiled = [key[0] for key in function._cache._cache_file._load_index()]
         assert compiled == [tuple(signature)], function.py_func.__qualname__  # one version: the warmup's is the kernel's
+
+
+_CALLS_BY_NAME = '''
+import numpy as np
+from sandmod.engine.jit import called, compiled, inlined
+
+@called
+def leaf(a, i):
+    total = 0
+    for k in range(i, len(a)):
+        total += a[k] * k
+    return total
+
+@inlined
+def middle(a, i):
+    return leaf(a, i) + 1
+
+@compiled
+def caller(a, i):
+    return leaf(a, i) - middle(a, i + 1)
+
+@compiled
+def later(a, i):
+    return middle(a, i)
+
+def main(first):
+    a = np.arange(10, dtype=np.int64)
+    if not first:  # compiled now, before anything loads leaf: middle, from the cache, loads it
+        print(later(a, 1))
+    print(caller(a, 1))
+    print(sum(caller.stats.cache_hits.values()), sum(leaf.stats.cache_hits.values()), sum(leaf.stats.cache_misses.values()))
+    if first:  # compiled here: the caller's module declares leaf, defines none of it
+        module = caller.overloads[caller.signatures[0]].library._final_module
+        print(sorted({bool(f.is_declaration) for f in module.functions if "4leaf" in f.name}))
+'''
+
+
+def test_a_function_called_by_name_is_compiled_once_and_a_cached_caller_loads_it_first(tmp_path):
+    """A caller links in nothing of a function marked `called`: its module declares it, the loader finds
+    its machine code; from the cache, the caller has what it calls loaded before its own code, and so
+    does an inlined function that calls it, for a caller compiled later."""
+    (tmp_path / "bynamed.py").write_text(_CALLS_BY_NAME)
+    env = os.environ | {"NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": str(tmp_path)}
+    squares = sum(k * k for k in range(1, 10))
+    expected = squares - (squares - 1 + 1)
+
+    def run(first):
+        done = subprocess.run([sys.executable, "-c", f"import bynamed; bynamed.main({first})"], env=env, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        return done.stdout.splitlines()
+
+    first = run(True)
+    assert first == [str(expected), "0 0 1", "[True]"]  # compiled, leaf once; declared in the caller, not defined there
+    again = run(False)
+    assert again == [str(squares + 1), str(expected), "1 1 0"]  # leaf from the cache, loaded for middle's sake  # both from the cache, leaf loaded for the caller's sake

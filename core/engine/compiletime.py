@@ -1,4 +1,4 @@
-"""Three changes to how numba compiles, for the kernel's sake: each makes it compile in less time,
+"""Four changes to how numba compiles, for the kernel's sake: each makes it compile in less time,
 and none changes what it computes (the frames are the same, bit for bit: ``tests/test_golden.py``).
 
 - **LLVM inlines the phases, numba compiles each once.** numba's own inlining
@@ -21,6 +21,19 @@ and none changes what it computes (the frames are the same, bit for bit: ``tests
   compiles any function. The warm-up can so compile the phases in processes
   of their own, side by side, and no process compiles one twice
   (:mod:`sandmod.jobs.warmup`).
+- **Callers call some functions by name.** A numba function that calls another links in the
+  callee's whole module and optimizes and compiles it again as part of its own, even where
+  LLVM leaves the call a call. A function marked by :func:`call_by_name` (the kernel's
+  :func:`~.jit.called` ones: the update with and without its fast loop, for the quick
+  kernel of a first run) is compiled once, in full, with machine code of its own; a caller
+  links in nothing of it (its module declares what it calls) and LLVM's loader finds it by
+  name: its address is added as the function is compiled or loaded from the cache
+  (``llvmlite.binding.add_symbol``), and a caller written to the cache names what it
+  calls, which loading it loads first. The update's two versions so compile side by side,
+  each in a process of its own, and the step that calls them in seconds; but that kernel
+  runs 6 to 8% slower on a world of scattered sand and water than the one that inlines
+  them (``bench.py yardstick``: 0.74 of the yardstick against 0.80), for reasons not
+  found, so it serves only the first run, while the other compiles (``kernel.step_soon``).
 - **The inliner copies each function once.** Before inlining a function
   (``inline="always"``; still so for ``_step_passes``, and for every
   :data:`~.jit.inlined` function where LLVM's inlining is not installed),
@@ -38,7 +51,7 @@ and none changes what it computes (the frames are the same, bit for bit: ``tests
   runs as fast as at -O3 (``tools/dev/bench.py against``, in turns: mix
   1.005x, halves 1.001x, everything 0.991x).
 
-:func:`install` makes the three changes; where numba is not as one expects (a method it
+:func:`install` makes the four changes; where numba is not as one expects (a method it
 replaces is missing), it leaves numba as it is for that one, and :data:`LLVM_INLINES` says
 whether LLVM inlines (if not, :data:`~.jit.inlined` falls back to numba's ``inline="always"``).
 
@@ -58,6 +71,10 @@ seconds in all for the kernel a step needs:
   the fast loop 2.6 and 1.7, step 11.3). ``_update_tile`` optimized only in its callers
   (``noinline``, its library without machine code) saved 3 s more of the step, but the kernel
   ran slower (``bench.py against``, numba's inlining over it: mix 1.073x, everything 1.047x).
+
+Called by name, the update's two versions in processes of their own and a step of 2.8 s: from an
+empty cache to the hourglass's first frame about 20 s on two idle cores, against 25 s with the
+update inlined into the step (``tools/dev/firstframe.py``).
 
 The kernel runs as fast as with numba's inlining (``tools/dev/bench.py against``, in turns, one
 thread, numba's inlining over LLVM's in three runs: mix 0.98 to 1.07x, halves 0.98 to 1.00x,
@@ -106,11 +123,13 @@ LLVM_INLINES = False
 
 def install() -> None:
     """Make numba's inliner copy each function once, LLVM's first round on the kernel's code light,
-    and LLVM inline the functions marked by :func:`inline_everywhere` (:data:`LLVM_INLINES`)."""
-    global LLVM_INLINES
+    LLVM inline the functions marked by :func:`inline_everywhere` (:data:`LLVM_INLINES`), and
+    callers call those marked by :func:`call_by_name` by name (:data:`CALLS_BY_NAME`)."""
+    global LLVM_INLINES, CALLS_BY_NAME
     _copy_once()
     _optimize_once()
     LLVM_INLINES = _inline_marked()
+    CALLS_BY_NAME = _call_marked_by_name()
 
 
 #: The start of the LLVM names of the functions compiled only for their callers (:func:`inline_everywhere`),
@@ -271,3 +290,93 @@ def _optimize_once() -> bool:
     _optimize_functions._sandmod = True
     CPUCodeLibrary._optimize_functions = _optimize_functions
     return True
+
+
+#: Whether callers call the functions marked by :func:`call_by_name` by name (numba is as :func:`install` expects).
+CALLS_BY_NAME = False
+#: The start of the LLVM names of the functions marked by :func:`call_by_name`.
+_BY_NAME: set[str] = set()
+#: Those of them compiled or loaded in this process: LLVM name -> (module, qualified name, signature),
+#: what a cached caller needs to load them again before its machine code is loaded.
+_CALLED: dict[str, tuple] = {}
+
+
+def call_by_name(function) -> None:
+    """Have callers call ``function`` (a plain Python function, about to be compiled) by its name:
+    its machine code, compiled once, not a copy of it compiled again into each caller (see the module)."""
+    _BY_NAME.add(_symbol(function))
+
+
+def _by_name(name: str) -> bool:
+    return any(name.startswith(prefix) for prefix in _BY_NAME)
+
+
+def _call_marked_by_name() -> bool:
+    """Make callers of the functions marked by :func:`call_by_name` link in nothing of theirs (the call
+    is to a declaration, which the loader resolves), tell LLVM's loader where each is once compiled
+    or loaded, and make a cached caller load them first; returns whether it did."""
+    try:
+        import llvmlite.binding as ll
+        from numba.core.codegen import CPUCodeLibrary
+        from numba.core.dispatcher import Dispatcher
+
+        originals = CPUCodeLibrary._get_module_for_linking, CPUCodeLibrary.serialize_using_object_code, CPUCodeLibrary._unserialize.__func__
+        add_overload = Dispatcher.add_overload
+        if CPUCodeLibrary._unserialize.__code__.co_varnames[:3] != ("cls", "codegen", "state"):
+            return False
+    except (ImportError, AttributeError):
+        return False
+    if getattr(add_overload, "_sandmod", False):
+        return True
+    for_linking, serialize, unserialize = originals
+
+    def _get_module_for_linking(self):
+        if self._shared_module is None and any(_by_name(f.name) for f in self._final_module.functions if not f.is_declaration):
+            # Nothing to link in: each caller's module declares what it calls, and the loader finds it.
+            empty = ll.parse_assembly("")
+            empty.triple, empty.data_layout = self._final_module.triple, self._final_module.data_layout
+            self._shared_module = empty
+        return for_linking(self)
+
+    def serialize_using_object_code(self):
+        name, kind, (code, shared) = serialize(self)
+        # What it calls, and what its callers link in calls (an inlined function's final module keeps none of its code).
+        modules = [self._final_module] + ([self._shared_module] if self._shared_module is not None else [])
+        called = {f.name for module in modules for f in module.functions if f.is_declaration and f.name in _CALLED}
+        return name, kind, (code, shared, [_CALLED[name] for name in sorted(called)])
+
+    def _unserialize(cls, codegen, state):
+        name, kind, data = state
+        if kind == "object" and len(data) == 3:
+            code, shared, called = data
+            for module, qualname, signature in called:  # loaded (or compiled) first: the loader needs them
+                _dispatcher(module, qualname).compile(signature)
+            state = name, kind, (code, shared)
+        return unserialize(cls, codegen, state)
+
+    def add_overload_(self, cres):
+        add_overload(self, cres)
+        name = cres.fndesc.llvm_func_name
+        if _by_name(name) and not cres.objectmode:
+            cres.library._ensure_finalized()
+            address = cres.library.codegen._engine._ee.get_function_address(name)  # also where loaded from the cache
+            if not address:
+                raise RuntimeError(f"{name}: compiled, but LLVM's loader does not find it")
+            ll.add_symbol(name, address)
+            _CALLED[name] = (self.py_func.__module__, self.py_func.__qualname__, tuple(cres.signature.args))
+
+    add_overload_._sandmod = True
+    CPUCodeLibrary._get_module_for_linking = _get_module_for_linking
+    CPUCodeLibrary.serialize_using_object_code = serialize_using_object_code
+    CPUCodeLibrary._unserialize = classmethod(_unserialize)
+    Dispatcher.add_overload = add_overload_
+    return True
+
+
+def _dispatcher(module: str, qualname: str):
+    import importlib
+
+    found = importlib.import_module(module)
+    for part in qualname.split("."):
+        found = getattr(found, part)
+    return found

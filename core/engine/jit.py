@@ -12,6 +12,9 @@ decorators every compiled function takes (the numba flags, in one place). Import
   function, twice (with and without its fast loop), each time in full. These have no machine
   code of their own and cannot be called from Python. Where numba is not as
   :mod:`.compiletime` expects, numba copies them into each caller instead (``inline="always"``).
+- :func:`called`: compiled once, with machine code of its own, which every caller calls by name
+  (:mod:`.compiletime`) instead of linking in a copy and optimizing it again: for the update's two
+  large versions, called once a tile, so that each is compiled in one process, once, side by side.
 - :data:`copied`: copied into each caller by numba (``inline="always"``): for ``_step_passes``,
   whose constant ``at_once`` keeps the parallel kernel out of the serial step.
 - :data:`in_place`: a function that updates the arrays it is handed and makes none, compiled
@@ -49,6 +52,13 @@ def inlined(function, *, cache: bool = True):
     compiletime.inline_everywhere(function)
     dispatcher = njit(cache=cache, _nrt=False, no_cpython_wrapper=True, no_cfunc_wrapper=True)(function)
     return compiletime.jit_only(dispatcher) if isinstance(dispatcher, Dispatcher) else dispatcher
+
+
+def called(function):
+    """Compiled once, with machine code of its own, which every compiled caller calls by name."""
+    if compiletime.CALLS_BY_NAME:
+        compiletime.call_by_name(function)
+    return njit(cache=True)(function)
 
 
 in_place = njit(cache=True, _nrt=False)

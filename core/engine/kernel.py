@@ -41,7 +41,7 @@ from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _ente
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
 from .heat import conduct
-from .jit import compiled, copied, inlined, parallel, prange
+from .jit import called, compiled, copied, inlined, parallel, prange
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
 from .moves import knock, may_flow, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
@@ -329,9 +329,33 @@ def step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, 
     return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, False)
 
 
+@called
+def step_region_fast_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
+    """:func:`step_region_fast`, compiled on its own and called by name (:func:`step_soon`)."""
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, True)
+
+
+@called
+def step_region_full_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
+    """:func:`step_region_full`, compiled on its own and called by name (:func:`step_soon`)."""
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, False)
+
+
 @compiled  # called, not inlined: inlined in the serial step it ran 3 to 7% slower (bench --against)
 def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route, seen):
     """Heat, then cells, in tile number ``tile`` (row-major), with or without :func:`step_region`'s fast loop (see :func:`step`)."""
+    _update_tile_with(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route, seen, False)
+
+
+@inlined  # into step_soon, which so compiles in less time
+def _update_tile_soon(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route, seen):
+    """:func:`_update_tile`, calling the update's versions by name (:func:`step_soon`)."""
+    _update_tile_with(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route, seen, True)
+
+
+@copied
+def _update_tile_with(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, tile, also_present, fast_gain, route, seen, by_name):
+    """:func:`_update_tile`, its update's versions inlined, or called by name where ``by_name`` (a constant in each caller)."""
     height, width = s.cells.shape
     tiles_x = (width + TILE - 1) >> TILE_SHIFT
     x0 = (tile % tiles_x) << TILE_SHIFT
@@ -339,7 +363,13 @@ def _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
     x1 = min(x0 + TILE, width)
     y1 = min(y0 + TILE, height)
     conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
-    if route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0)):
+    fast = route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0))
+    if by_name:
+        if fast:
+            fast_gain[tile] = step_region_fast_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
+        else:
+            step_region_full_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
+    elif fast:
         fast_gain[tile] = step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
     else:
         step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
@@ -380,9 +410,9 @@ def _tiles_of_pass(awake, woken, frame, p, hands, todo, order):
 
 
 @copied
-def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, at_once):
+def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, at_once, by_name):
     """:func:`step`, its tiles updated by :func:`update_tiles_at_once` where ``at_once`` (a constant
-    in each caller), else one after another here."""
+    in each caller), else one after another here, by :func:`_update_tile_soon` where ``by_name`` (a constant too)."""
     woken[:] = 0
     stirred[:] = 0
     detonations[:] = 0
@@ -398,7 +428,10 @@ def _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even
             update_tiles_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order, count, also_present, fast_gain, route, seen)
         else:
             for k in range(count):
-                _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order[k], also_present, fast_gain, route, seen)
+                if by_name:
+                    _update_tile_soon(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order[k], also_present, fast_gain, route, seen)
+                else:
+                    _update_tile(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, order[k], also_present, fast_gain, route, seen)
     chunks_y, chunks_x = awake.shape
     for cy in range(chunks_y):
         for cx in range(chunks_x):
@@ -434,10 +467,19 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     thread never compiles numba's parallel code, nor starts its threads.
     """
     one = np.int64(1)  # not the literal 1: numba would compile what it is passed to a second time for it
-    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, seen, False)
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, seen, False, False)
+
+
+@compiled
+def step_soon(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen):
+    """:func:`step`, the same frames, compiled in seconds and run a few per cent slower: it calls the update's
+    two versions by name (:func:`step_region_fast_by_name`, each compiled on its own, side by side) rather than
+    optimizing them again as part of itself. A first run steps with it while :func:`step` compiles."""
+    one = np.int64(1)
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, seen, False, True)
 
 
 @compiled
 def step_at_once(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen):
     """:func:`step` on ``hands`` of numba's threads (numba's count set to it)."""
-    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, True)
+    return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen, True, False)

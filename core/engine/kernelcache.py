@@ -15,7 +15,7 @@ from importlib import metadata
 from pathlib import Path
 
 #: What the commands (and the pytest plugin) say before they compile a new version's kernels.
-NOTICE = "compiling the kernel (once per version, about 25 s on two cores)..."
+NOTICE = "compiling the kernel (once per version, about 20 s on two cores)..."
 
 #: The engine package: the files whose code or constants the compiled kernels contain. Numba
 #: notices a change to a kernel's own file only (it keeps the values of globals taken from other

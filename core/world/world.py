@@ -196,6 +196,21 @@ def _kernel():
     return kernel
 
 
+_STEP_COMPILED = False  # this version's kernels are compiled, the best step among them: once so, always so
+
+
+def _serial_step(kernel):
+    """The step on one thread: :func:`~sandmod.engine.kernel.step` once this version's kernels are all
+    compiled (:mod:`sandmod.engine.kernelcache`), else ``step_soon``, the same frames compiled in seconds
+    (a first run steps with it while the other compiles: :mod:`sandmod.jobs.warmup`)."""
+    global _STEP_COMPILED
+    if not _STEP_COMPILED:
+        from ..engine import kernelcache
+
+        _STEP_COMPILED = kernelcache.is_compiled()
+    return kernel.step if _STEP_COMPILED else kernel.step_soon
+
+
 def _speed_units(cells_a_frame) -> np.ndarray:
     """Speeds in cells a frame as the state holds them, 1/256ths of a cell, within MAX_SPEED
     (the kernel then holds each particle to its own max_speed)."""
@@ -465,6 +480,27 @@ class World:
         arrays directly; the world's own methods keep track themselves)."""
         self._changed[:] = 1
 
+    def _step_arguments(self, hands: int) -> tuple:
+        """What the kernel's step is handed, this frame, on ``hands`` threads."""
+        return (
+            self.state,
+            self.tables,
+            frame_key(self.seed, self.frame, SALT_MOVE),
+            frame_key(self.seed, self.frame, SALT_REACT),
+            frame_key(self.seed, self.frame, SALT_SPAWN),
+            self.frame,
+            self.awake,
+            self._woken,
+            self._even,
+            self._stirred,
+            self._detonations,
+            hands,
+            self._also_present,
+            self._fast_gain,
+            self._fast_route,
+            self._seen,
+        )
+
     def step(self) -> None:
         """Advance one frame: emitters pour, sprays shoot, the timeline paints and heats,
         the kernel updates every cell, neighbour rules change cells, explosions go off."""
@@ -492,25 +528,8 @@ class World:
         before = self.awake.copy() if self.ruleset.behaviours is not None else None
         hands = self._thread_count()
         started = perf_counter()
-        stepper = kernel.step_at_once if hands > 1 else kernel.step
-        went_off = stepper(
-            self.state,
-            self.tables,
-            frame_key(self.seed, self.frame, SALT_MOVE),
-            frame_key(self.seed, self.frame, SALT_REACT),
-            frame_key(self.seed, self.frame, SALT_SPAWN),
-            self.frame,
-            self.awake,
-            self._woken,
-            self._even,
-            self._stirred,
-            self._detonations,
-            hands,
-            self._also_present,
-            self._fast_gain,
-            self._fast_route,
-            self._seen,
-        )
+        stepper = kernel.step_at_once if hands > 1 else _serial_step(kernel)
+        went_off = stepper(*self._step_arguments(hands))
         if self.threads is None:
             self._chooser.timed(perf_counter() - started)
         if self.ruleset.neighbours is not None:

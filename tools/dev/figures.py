@@ -85,7 +85,7 @@ FIRST_FRAME = r"^first frame ([\d.]+) s"
 
 
 def _runs(output: str) -> str:
-    """Each run's first frame, as a page lists them: "25.1, 25.5 and 26.0"."""
+    """Each run's first frame, as a page lists them: "19.5, 20.1 and 19.9"."""
     seconds = re.findall(FIRST_FRAME, output, re.M)
     return ", ".join(seconds[:-1]) + " and " + seconds[-1]
 PYTEST = "bash -c 'SECONDS=0; python -m pytest -q {} >/dev/null 2>&1; echo took $((SECONDS / 60)) min $((SECONDS % 60)) s'"
@@ -146,7 +146,7 @@ FIGURES: list[Figure] = [
     fact("README.md", "(512², 1000 steps", "1000", "bench_steps"),
     Figure("README.md", "# {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}",
            "{'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}", README_PYTHON, r"^(\{.*\})$"),
-    measured("README.md", "kernel (its first frame after 25 s on two idle cores", "25", FIRST, FIRST_FRAME, 0),
+    measured("README.md", "kernel (its first frame after 20 s on two idle cores", "20", FIRST, FIRST_FRAME, 0),
     measured("README.md", "This takes four to five minutes on two cores", "four to five", PYTEST.format(""), r"^took (.*)$"),
     measured("README.md", "five\nto six minutes more", "five\nto six", PYTEST.format("-m slow"), r"^took (.*)$"),
     *_speeds("README.md", {"mix": ("a quarter water) | 232", "232", "| 302 | `python tools/dev/bench.py", "302"),
@@ -157,11 +157,11 @@ FIGURES: list[Figure] = [
     measured("README.md", "(195x) |", "195", SETTLED, lambda out: _settled(out, "ratio")),
     # docs/index.md, docs/tutorial.md, docs/troubleshooting.md
     fact("docs/index.md", "With Python 3.11 or newer:", "3.11", "python_min"),
-    measured("docs/index.md", "kernel (its first frame after 25 s on two idle", "25", FIRST, FIRST_FRAME, 0),
+    measured("docs/index.md", "kernel (its first frame after 20 s on two idle", "20", FIRST, FIRST_FRAME, 0),
     fact("docs/tutorial.md", "With Python 3.11 or newer", "3.11", "python_min"),
-    measured("docs/troubleshooting.md", "(once per version, about 25 s on two cores)", "25", FIRST, FIRST_FRAME, 0),
-    measured("docs/troubleshooting.md", "first frame after 25 s on two idle cores", "25", FIRST, FIRST_FRAME, 0),
-    measured("docs/troubleshooting.md", "25.1, 25.5 and 26.0 s; the version before", "25.1, 25.5 and 26.0", FIRST + " --runs 3", _runs),
+    measured("docs/troubleshooting.md", "(once per version, about 20 s on two cores)", "20", FIRST, FIRST_FRAME, 0),
+    measured("docs/troubleshooting.md", "first frame after 20 s on two idle cores", "20", FIRST, FIRST_FRAME, 0),
+    measured("docs/troubleshooting.md", "19.5, 20.1 and 19.9 s; the version before", "19.5, 20.1 and 19.9", FIRST + " --runs 3", _runs),
     fact("docs/troubleshooting.md", "sandmod needs Python 3.11 or newer", "3.11", "python_min"),
     fact("docs/troubleshooting.md", "numba 0.68 or newer", "0.68", "numba_min"),
     fact("docs/troubleshooting.md", "(4G unless you say)", "4G", "max_memory"),
@@ -202,7 +202,7 @@ FIGURES: list[Figure] = [
     measured("docs/performance.md", "mix 0.959x", "0.959", LOADED, _json("ratio", scene="mix"), 3),
     measured("docs/performance.md", "halves 0.950x", "0.950", LOADED, _json("ratio", scene="halves"), 3),
     measured("docs/performance.md", "everything 0.981x", "0.981", LOADED, _json("ratio", scene="everything"), 3),
-    measured("docs/performance.md", "25.6 s against 28.9", "25.6", FIRST + " --runs 3", lambda output: _runs(output).split()[-1]),
+    measured("docs/performance.md", "21.9 s against 30.1", "21.9", FIRST + " --runs 3", lambda output: _runs(output).split()[-1]),
     # docs/architecture.md
     fact("docs/architecture.md", "(4,096\nelements x 15 = 61,440", "4,096", "max_elements"),
     fact("docs/architecture.md", "elements x 15 =", "15", "colours_per_element"),
@@ -235,7 +235,7 @@ FIGURES: list[Figure] = [
     fact("docs/architecture.md", "per tile three 8-byte words", "three", "tile_words"),
     fact("docs/architecture.md", "16.13 bytes a cell in all", "16.13", "bytes_per_cell"),
     fact("docs/architecture.md", "Up to 4,096 elements load at once", "4,096", "max_elements"),
-    measured("docs/architecture.md", "first frame comes 25 s after the command starts", "25", FIRST, FIRST_FRAME, 0),
+    measured("docs/architecture.md", "first frame comes 20 s after the command starts", "20", FIRST, FIRST_FRAME, 0),
     # docs/how-to/play.md
     fact("docs/how-to/play.md", "a GIF of the last ten seconds", "ten", "play_capture_seconds"),
     fact("docs/how-to/play.md", "three rows of them", "three", "play_menu_rows"),
