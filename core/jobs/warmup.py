@@ -52,7 +52,7 @@ PARTS = {
     "taps and sprays": (),
     "neighbour rules": (),
 }
-#: The parts a step of a world links together (the rest are called on their own).
+#: The parts the quick step (``kernel.step_soon``) links together, compiled before it here (the rest are called on their own, or later).
 STEP_NEEDS = ("moves", "fast loop", "phases", "cells with the fast loop", "cells without it")
 #: The parts a world may not use as it starts: they may go on compiling while it runs (:func:`unused_at_first`).
 LATER = ("step", "blasts", "taps and sprays", "neighbour rules")
