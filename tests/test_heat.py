@@ -62,7 +62,7 @@ def test_conduction_matches_the_slow_reference(ruleset, seed):
     s, t = world.state, world.tables
     for frame in range(6):
         expected = conduct_reference(s.cells, s.heat, t, frame)
-        conduct(s, t, frame, np.ones_like(world.awake), np.zeros_like(world._woken), world.awake * 0, np.zeros_like(world._stirred), 0, 0, world.width, world.height)
+        conduct(s, t, frame, np.ones_like(world.awake), np.zeros_like(world._woken), np.zeros_like(world._even), np.zeros_like(world._stirred), 0, 0, world.width, world.height)
         assert (s.heat == expected).all()
 
 
