@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 import threading
 import time
@@ -158,7 +159,14 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
     for name in ("step", "step_soon", "take_detonations", "explode", "conduct"):
         monkeypatch.setattr(kernel, name, getattr(Recording(), name))
     monkeypatch.setattr(world_module, "_STEP_COMPILED", False)  # as in a first run's process
-    monkeypatch.setattr(warmup, "_Worker", Worker := _FakeWorker.recording([]))  # no processes
+
+    class Worker(_FakeWorker.recording([])):  # no processes
+        def compile(self, part):
+            if part == "step":
+                _until(lambda: called)  # as long as it takes, after the quick step
+            return super().compile(part)
+
+    monkeypatch.setattr(warmup, "_Worker", Worker)
     assert not kernelcache.is_compiled()
     said = []
     compile_kernels(ruleset, announce=lambda line: (time.sleep(0.02), said.append(line)))  # slow to say it, as a terminal may be
@@ -167,6 +175,13 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
     assert called == ["step_soon", "step", "take_detonations", "explode"]
     assert kernelcache.is_compiled() and not warmup._LATER  # all of it done as it returns, nothing left for later
     assert any(line.startswith(f"compiling the kernel: {len(warmup.PARTS)} of {len(warmup.PARTS)} parts done") for line in said)
+
+
+def _until(condition, seconds=60):
+    """Wait until ``condition()`` is true, for ``seconds`` at most."""
+    deadline = time.monotonic() + seconds
+    while not condition() and time.monotonic() < deadline:
+        time.sleep(0.01)
 
 
 class _FakeWorker:
@@ -222,6 +237,50 @@ def test_a_first_frame_waits_only_for_the_parts_its_world_uses_and_the_rest_fini
     release.set()
     warmup.finish_later()
     assert kernelcache.is_compiled() and not warmup._LATER and sorted(part for _, part in events) == sorted(warmup.PARTS)
+
+
+def test_while_the_parts_waited_for_wait_for_theirs_a_worker_compiles_a_later_part(monkeypatch):
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    events, release = [], threading.Event()
+
+    class Slow(_FakeWorker.recording(events)):
+        def compile(self, part):
+            if part == "moves":
+                release.wait(300)
+            return super().compile(part)
+
+    first = [part for part in warmup.PARTS if part not in warmup.LATER]
+    compiling = warmup._Compiling(lambda done: None, first, worker=Slow)
+    _until(lambda: ("compile", "blasts") in events)
+    waiting = list(events)
+    release.set()
+    compiling.join()
+    assert ("compile", "blasts") in waiting and ("compile", "cells") not in waiting  # cells waits for moves; blasts need not
+    assert [part for _, part in waiting if part in first] == [part for part in first if not warmup.PARTS[part] and part != "moves"]
+    assert compiling.succeeded()
+
+
+def test_a_first_run_switches_to_the_best_step_once_its_part_is_done(ruleset, tmp_path, monkeypatch):
+    from sandmod.engine import kernel
+    from sandmod.world import world as world_module
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # not compiled yet
+    monkeypatch.setattr(world_module, "_STEP_COMPILED", False)
+    events, release = [], threading.Event()
+
+    class Slow(_FakeWorker.recording(events)):
+        def compile(self, part):
+            if part == "step":
+                release.wait(300)
+            return super().compile(part)
+
+    monkeypatch.setattr(warmup, "_Worker", Slow)
+    compile_kernels(ruleset, first_frame_of=World(ruleset, 64, 64))
+    assert world_module._serial_step(kernel) is kernel.step_soon
+    release.set()
+    _until(kernelcache.best_step_cached)
+    assert world_module._serial_step(kernel) is kernel.step and not kernelcache.is_compiled()  # the rest may still compile
+    warmup.finish_later()
 
 
 def test_a_part_that_failed_leaves_the_version_not_compiled(ruleset, tmp_path, monkeypatch):

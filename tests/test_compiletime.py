@@ -67,23 +67,58 @@ def test_inlined_functions_still_compute_the_same():
         assert outer(a, b) == _branchy(a, b) + _branchy(b, a)
 
 
-def test_only_our_code_gets_the_light_first_round(monkeypatch):
+def _levels(monkeypatch, maker):
+    """The optimization levels that numba's ``maker`` of pass managers is asked for, from now on."""
     from numba.core.codegen import JITCPUCodegen
 
     levels = []
-    original = JITCPUCodegen._function_pass_manager
+    original = getattr(JITCPUCodegen, maker)
 
     def recorded(self, **kwargs):
         levels.append(kwargs.get("opt", "numba's"))
         return original(self, **kwargs)
 
-    monkeypatch.setattr(JITCPUCodegen, "_function_pass_manager", recorded)
+    monkeypatch.setattr(JITCPUCodegen, maker, recorded)
+    return levels
+
+
+def test_only_our_code_gets_the_light_first_round(monkeypatch):
+    levels = _levels(monkeypatch, "_function_pass_manager")
     assert njit(lambda a: a * 2 + 1)(20) == 41  # this module's: numba's own level
     assert levels and set(levels) == {"numba's"}
     levels.clear()
     monkeypatch.setattr(compiletime, "OURS", "test_compiletime")  # as if this module were the kernel's
     assert njit(lambda a: a * 3 + 1)(20) == 61
     assert levels and set(levels) == {compiletime.FUNCTION_OPT}
+
+
+def _halved(a):
+    return a // 2 - 1
+
+
+def test_only_the_quick_step_is_optimized_lightly(monkeypatch):
+    levels = _levels(monkeypatch, "_module_pass_manager")
+    assert njit(lambda a: a * 2 + 1)(20) == 41
+    assert levels and compiletime.QUICK_OPT not in levels  # numba's -O3, twice
+    levels.clear()
+    assert jit.quick(_halved, cache=False)(20) == 9
+    assert levels == [compiletime.QUICK_OPT]
+
+
+def test_the_update_without_its_fast_loop_never_compiles_it(monkeypatch):
+    # step_region is handed None, not False, for the version without: numba drops the branch before typing it.
+    from numba import types
+
+    from sandmod.engine import kernel
+
+    typed = []
+    original = kernel._fast_cells.compile
+    monkeypatch.setattr(kernel._fast_cells, "compile", lambda signature: typed.append(signature) or original(signature))
+    region = warmup.phase_signatures(warmup._tiny_world())[kernel.step_region_full]
+    for fast, compiles in ((types.none, False), (types.boolean, True)):
+        typed.clear()
+        njit(cache=False)(kernel.step_region.py_func).compile((*region, fast))
+        assert bool(typed) is compiles, fast
 
 
 def _leaf(a, i):

@@ -13,8 +13,11 @@ decorators every compiled function takes (the numba flags, in one place). Import
   code of their own and cannot be called from Python. Where numba is not as
   :mod:`.compiletime` expects, numba copies them into each caller instead (``inline="always"``).
 - :func:`called`: compiled once, with machine code of its own, which every caller calls by name
-  (:mod:`.compiletime`) instead of linking in a copy and optimizing it again: for the update's two
-  large versions, called once a tile, so that each is compiled in one process, once, side by side.
+  (:mod:`.compiletime`) instead of linking in a copy and optimizing it again: for the update without its
+  fast loop, called once a tile by the quick step of a first run, so that it is compiled in a process
+  of its own, and the step that calls it in seconds.
+- :func:`quick`: optimized by LLVM at -O1, not -O3 (:mod:`.compiletime`): for the quick step
+  and what it calls by name, which so compile in less time and ran as fast.
 - :data:`copied`: copied into each caller by numba (``inline="always"``): for ``_step_passes``,
   whose constant ``at_once`` keeps the parallel kernel out of the serial step.
 - :data:`in_place`: a function that updates the arrays it is handed and makes none, compiled
@@ -55,10 +58,17 @@ def inlined(function, *, cache: bool = True):
 
 
 def called(function):
-    """Compiled once, with machine code of its own, which every compiled caller calls by name."""
+    """Compiled once, with machine code of its own, which every compiled caller calls by name; optimized
+    lightly, as :func:`quick`."""
     if compiletime.CALLS_BY_NAME:
         compiletime.call_by_name(function)
-    return njit(cache=True)(function)
+    return quick(function)
+
+
+def quick(function, *, cache: bool = True):
+    """Compiled with LLVM's light optimization (:data:`.compiletime.QUICK_OPT`): for the quick step of a first run."""
+    compiletime.optimize_lightly(function)
+    return njit(cache=cache)(function)
 
 
 in_place = njit(cache=True, _nrt=False)

@@ -41,7 +41,7 @@ from .cells import CARRIED, GAS, LIQUID, MOVED, POWDER, STATIC, _at, _bit, _ente
 from .chunks import _covers, _grown, _mark, _pass_tiles, _wake, clear_marks
 from .fire import heat_and_fire
 from .heat import conduct
-from .jit import called, compiled, copied, inlined, parallel, prange
+from .jit import called, compiled, copied, inlined, parallel, prange, quick
 from .layout import ALWAYS, BURNING, CACHED_CELLS, CHUNK_SHIFT, FLAMMABLE, IGNITES, LINE_CELLS, LOOSE, TILE, TILE_SHIFT
 from .moves import knock, may_flow, move, sink_run, slump, slump_side
 from .paint import paint_cells  # noqa: F401
@@ -246,13 +246,13 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
     not in the mask skips looking at its neighbours for them (in a world of
     sand and water, every cell does).
 
-    With ``fast`` (a constant: :func:`step_region_fast` and :func:`step_region_full` are
-    its two compiled versions), the cells
-    are taken first by :func:`_fast_cells`; each cell that needs more gets the
+    With ``fast`` True (:func:`step_region_fast`; None: :func:`step_region_full`, its other compiled
+    version), the cells are taken first by :func:`_fast_cells`; each cell that needs more gets the
     full update, and the fast loop resumes after it: the same frames either
     way. Returns how well the fast loop did: the cells of the rows updated,
     less HANDED_ON_COST for each one it handed on (above zero: it paid);
-    without ``fast``, 0.
+    without ``fast``, 0. (None, not False: numba drops a branch on ``is None`` before it types the
+    function, so the version without never compiles the fast loop.)
     """
     cells = s.cells
     height, width = cells.shape
@@ -289,7 +289,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
             visited += count
             n = np.int64(0)  # not the literal 0: numba would compile _fast_cells for it too, while it types the loop
             while n < count:
-                if fast:
+                if fast is not None:
                     n, x, e, ready, busy_box, stir_box = _fast_cells(s, t, y, sx0, sx1, n, forward, present, keys[4], keys[5], ambient, x0, y0, x1, y1, frame, busy_box, stir_box)
                     if n == count:
                         break
@@ -314,7 +314,7 @@ def step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirr
                 wx0, wy0, wx1, wy1 = _grown(stir_box[0], stir_box[2], stir_box[1], stir_box[3], width, height)
                 _wake(woken, stirred, True, wx0, wy0, wx1, wy1)
     seen[tile] = present
-    return visited - HANDED_ON_COST * handed_on if fast else 0
+    return visited - HANDED_ON_COST * handed_on if fast is not None else 0
 
 
 @inlined
@@ -326,19 +326,13 @@ def step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, 
 @inlined
 def step_region_full(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
     """:func:`step_region` without its fast loop: every cell gets the full update."""
-    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, False)
-
-
-@called
-def step_region_fast_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
-    """:func:`step_region_fast`, compiled on its own and called by name (:func:`step_soon`)."""
-    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, True)
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, None)
 
 
 @called
 def step_region_full_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen):
-    """:func:`step_region_full`, compiled on its own and called by name (:func:`step_soon`)."""
-    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, False)
+    """:func:`step_region_full`, compiled on its own and called by name: the quick step's update (:func:`step_soon`)."""
+    return step_region(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen, None)
 
 
 @compiled  # called, not inlined: inlined in the serial step it ran 3 to 7% slower (bench --against)
@@ -364,11 +358,8 @@ def _update_tile_with(s, t, move_key, react_key, spawn_key, frame, awake, woken,
     y1 = min(y0 + TILE, height)
     conduct(s, t, frame, awake, woken, even, stirred, x0, y0, x1, y1)
     fast = route > 0 or (route == 0 and (fast_gain[tile] > 0 or ((frame + tile) & (FAST_TRIAL - 1)) == 0))
-    if by_name:
-        if fast:
-            fast_gain[tile] = step_region_fast_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
-        else:
-            step_region_full_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
+    if by_name:  # without the fast loop, whatever the route: the same frames, and one version fewer to compile first
+        step_region_full_by_name(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
     elif fast:
         fast_gain[tile] = step_region_fast(s, t, move_key, react_key, spawn_key, frame, awake, woken, stirred, detonations, tile, x0, y0, x1, y1, also_present, seen)
     else:
@@ -470,11 +461,11 @@ def step(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirre
     return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, seen, False, False)
 
 
-@compiled
+@quick
 def step_soon(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, hands, also_present, fast_gain, route, seen):
-    """:func:`step`, the same frames, compiled in seconds and run a few per cent slower: it calls the update's
-    two versions by name (:func:`step_region_fast_by_name`, each compiled on its own, side by side) rather than
-    optimizing them again as part of itself. A first run steps with it while :func:`step` compiles."""
+    """:func:`step`, the same frames, compiled in seconds and run slower: it calls the update without its fast
+    loop, compiled on its own, by name (:func:`step_region_full_by_name`), rather than optimizing both the update's
+    versions again as part of itself. A first run steps with it while :func:`step` compiles."""
     one = np.int64(1)
     return _step_passes(s, t, move_key, react_key, spawn_key, frame, awake, woken, even, stirred, detonations, one, also_present, fast_gain, route, seen, False, True)
 

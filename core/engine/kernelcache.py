@@ -15,7 +15,7 @@ from importlib import metadata
 from pathlib import Path
 
 #: What the commands (and the pytest plugin) say before they compile a new version's kernels.
-NOTICE = "compiling the kernel (once per version, about 20 s on two cores)..."
+NOTICE = "compiling the kernel (once per version, about 17 s on two cores)..."
 
 #: The engine package: the files whose code or constants the compiled kernels contain. Numba
 #: notices a change to a kernel's own file only (it keeps the values of globals taken from other
@@ -75,6 +75,21 @@ def _stamp() -> Path:
 def is_compiled() -> bool:
     """Have this version's kernels been compiled and cached (so a start takes a second, not a minute)?"""
     return _stamp().exists()
+
+
+_best_step_cached: Path | None = None  # the cache folder where the warm-up's part for the best step is done
+
+
+def mark_best_step_cached() -> None:
+    """Note that the best step (``kernel.step``) is in the cache before the rest is (the warm-up's part
+    for it is done): a world on the quick step switches to it (:func:`best_step_cached`)."""
+    global _best_step_cached
+    _best_step_cached = kernel_cache_dir()
+
+
+def best_step_cached() -> bool:
+    """Is the best step in the cache: this version compiled, or its part done by this process's warm-up?"""
+    return _best_step_cached == kernel_cache_dir() or is_compiled()
 
 
 def mark_compiled() -> None:

@@ -4,15 +4,15 @@ saying on the terminal how far along it is.
 numba compiles a function when it is first called, and caches what it
 compiled on disk (:mod:`sandmod.engine.kernelcache`); a later process loads it in a
 fraction of a second. The cell update's phases are compiled each on its own and
-inlined by LLVM, and the update's two versions each on its own, called by name by a
+inlined by LLVM, and the update without its fast loop on its own too, called by name by a
 quick step (:mod:`sandmod.engine.compiletime`), so :func:`compile_kernels`
 compiles them side by side, each subtree of them (:data:`PARTS`) handed to one of as many worker
 processes as there are CPUs (``python -m sandmod.jobs.warmup --serve``), each part
 once those whose functions it calls are cached, then steps a tiny world itself with
 the quick step (``kernel.step_soon``), linking what they compiled: no function is
 compiled by two processes. The step a world takes once the version is compiled
-(``kernel.step``, a few per cent faster) optimizes the update again as part of
-itself, a part of its own. Given the world a command is about to run,
+(``kernel.step``, faster) optimizes the update's two versions, with and without the
+fast loop, again as part of itself, a part of its own. Given the world a command is about to run,
 :func:`compile_kernels` returns once that world's first frame can be drawn with the
 quick step, the parts it does not use at first, and the best step, still compiling
 (:func:`finish_later`).
@@ -42,20 +42,19 @@ import numpy as np
 #: longest chain first.
 PARTS = {
     "moves": (),  # moves.move and everything it calls
-    "fast loop": (),  # kernel._fast_cells: it calls a few of the moves (slumps, knocks), compiled here too if not yet cached
-    "phases": (),  # heat and fire, lifetime, reactions, and heat's conduction
-    "cells with the fast loop": ("moves", "fast loop", "phases"),  # the cell update, in full: the quick step calls it by name
-    "cells without it": ("moves", "phases"),
-    "step": ("cells with the fast loop", "cells without it"),  # the best step: the update inlined, both versions
+    "phases": (),  # heat and fire, lifetime, reactions, heat's conduction, and the step's lists of tiles
+    "cells": ("moves", "phases"),  # the cell update without its fast loop, which the quick step calls by name
     "pixels": (),
+    "fast loop": ("moves", "phases"),  # kernel._fast_cells, and the update with it: for the best step
+    "step": ("cells", "fast loop"),  # the best step: the update inlined, both versions
     "blasts": (),
     "taps and sprays": (),
     "neighbour rules": (),
 }
 #: The parts the quick step (``kernel.step_soon``) links together, compiled before it here (the rest are called on their own, or later).
-STEP_NEEDS = ("moves", "fast loop", "phases", "cells with the fast loop", "cells without it")
+STEP_NEEDS = ("moves", "phases", "cells")
 #: The parts a world may not use as it starts: they may go on compiling while it runs (:func:`unused_at_first`).
-LATER = ("step", "blasts", "taps and sprays", "neighbour rules")
+LATER = ("fast loop", "step", "blasts", "taps and sprays", "neighbour rules")
 
 
 def _tiny_world():
@@ -79,6 +78,7 @@ def phase_signatures(world) -> dict:
     S, T, i, yes = typeof(s), typeof(t), types.int64, types.boolean
     e, ambient, box = typeof(s.cells[0, 0]), typeof(t.temp_start[0]), types.UniTuple(types.int64, 4)
     counts = typeof(world._detonations)
+    tiles = typeof(np.empty(1, np.int64))
     signatures = {
         moves.move: (S, T, i, i, e, i, i, i, i, i, yes, i, i, i, i, i, ambient),
         fire.heat_and_fire: (S, T, i, i, e, i, i, counts, i),
@@ -86,10 +86,11 @@ def phase_signatures(world) -> dict:
         reactions.react: (S, T, i, i, e, i, i, i, i),
         kernel._fast_cells: (S, T, i, i, i, i, yes, i, i, i, ambient, i, i, i, i, i, box, box),
         heat.conduct: (S, T, i, typeof(world.awake), typeof(world._woken), typeof(world._even), typeof(world._stirred), i, i, i, i),
+        kernel.clear_marks: (typeof(s.flags), typeof(world.awake)),
+        kernel._tiles_of_pass: (typeof(world.awake), typeof(world._woken), i, i, i, tiles, tiles),
     }
     region = (S, T, i, i, i, i, typeof(world.awake), typeof(world._woken), typeof(world._stirred), counts, i, i, i, i, i, i, typeof(world._seen))
-    return signatures | {kernel.step_region_fast: region, kernel.step_region_full: region,
-                         kernel.step_region_fast_by_name: region, kernel.step_region_full_by_name: region}
+    return signatures | {kernel.step_region_fast: region, kernel.step_region_full: region, kernel.step_region_full_by_name: region}
 
 
 def compile_part(part: str) -> None:
@@ -101,10 +102,9 @@ def compile_part(part: str) -> None:
     s, t = world.state, world.tables
     functions = {
         "moves": [moves.move],
-        "fast loop": [kernel._fast_cells],
-        "phases": [fire.heat_and_fire, reactions.lifetime, reactions.react, heat.conduct],
-        "cells with the fast loop": [kernel.step_region_fast_by_name],
-        "cells without it": [kernel.step_region_full_by_name],
+        "phases": [fire.heat_and_fire, reactions.lifetime, reactions.react, heat.conduct, kernel.clear_marks, kernel._tiles_of_pass],
+        "cells": [kernel.step_region_full_by_name],
+        "fast loop": [kernel._fast_cells, kernel.step_region_fast],
     }
     if part in functions:
         signatures = phase_signatures(world)
@@ -172,12 +172,13 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
 
 
 def unused_at_first(world) -> tuple[str, ...]:
-    """The parts of :data:`LATER` that ``world`` does not use as it starts: the best step (a first run
-    steps with the quick one), and where it has no explosive in its rules and none set off by its
+    """The parts of :data:`LATER` that ``world`` does not use as it starts: the best step and its fast loop (a
+    first run steps with the quick step), and where it has no explosive in its rules and none set off by its
     file, no sprays, no neighbour rules, their parts. (A player may paint an explosive
     later: then the blasts compile as it goes off, if they have not yet.)"""
     used = {
-        "step": False,  # a first run steps with the quick one
+        "fast loop": False,  # a first run steps with the quick step, which has none
+        "step": False,
         "blasts": bool(world.scheduled) or bool(world.tables.blast.any()),
         "taps and sprays": bool(world.sprays),
         "neighbour rules": world.ruleset.neighbours is not None,
@@ -292,7 +293,7 @@ def _serve() -> None:
 class _Compiling:
     """:data:`PARTS` compiling in :class:`_Worker` processes, as many at once as there are CPUs (one
     fewer while this process compiles too: :meth:`here_after`), each part once those it waits for are
-    done, the parts of ``told`` first. ``progress`` hears how many of ``told`` are done, each time
+    done, the parts of ``told`` first (others while none of those is ready). ``progress`` hears how many of ``told`` are done, each time
     one of them is."""
 
     def __init__(self, progress: Callable[[int], object], told, worker: Callable[[], _Worker] | None = None) -> None:
@@ -313,8 +314,7 @@ class _Compiling:
         """A part to compile now, once there is one (under the lock); None: no more."""
         while not self._stopping and self._waiting:
             ready = [part for part in self._waiting if self._finished.keys() >= set(PARTS[part])]
-            if self._told & set(self._waiting):  # those waited for first
-                ready = [part for part in ready if part in self._told]
+            ready = [part for part in ready if part in self._told] or ready  # those waited for first
             here = self._here_after is not None and self._finished.keys() >= self._here_after
             if ready and self._compiling < max(1, self._most - here):
                 self._waiting.remove(ready[0])
@@ -335,6 +335,10 @@ class _Compiling:
                         worker = self._worker()
                         self._workers.append(worker)
                 compiled = worker.compile(part)
+                if compiled and part == "step":
+                    from ..engine import kernelcache
+
+                    kernelcache.mark_best_step_cached()  # a world on the quick step switches to it
                 with self._changed:  # said before anyone waiting for it goes on
                     self._finished[part] = compiled
                     self._compiling -= 1

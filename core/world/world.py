@@ -196,18 +196,19 @@ def _kernel():
     return kernel
 
 
-_STEP_COMPILED = False  # this version's kernels are compiled, the best step among them: once so, always so
+_STEP_COMPILED = False  # the best step is in the cache: once so, always so
 
 
 def _serial_step(kernel):
-    """The step on one thread: :func:`~sandmod.engine.kernel.step` once this version's kernels are all
-    compiled (:mod:`sandmod.engine.kernelcache`), else ``step_soon``, the same frames compiled in seconds
-    (a first run steps with it while the other compiles: :mod:`sandmod.jobs.warmup`)."""
+    """The step on one thread: :func:`~sandmod.engine.kernel.step` once it is in the cache
+    (:func:`sandmod.engine.kernelcache.best_step_cached`), else ``step_soon``, the same frames compiled in
+    seconds (a first run steps with it while the other compiles, and switches when it is done:
+    :mod:`sandmod.jobs.warmup`)."""
     global _STEP_COMPILED
     if not _STEP_COMPILED:
         from ..engine import kernelcache
 
-        _STEP_COMPILED = kernelcache.is_compiled()
+        _STEP_COMPILED = kernelcache.best_step_cached()
     return kernel.step if _STEP_COMPILED else kernel.step_soon
 
 

@@ -43,8 +43,8 @@ def test_the_python_run_reaches_the_compiled_kernels_frames_and_counts_each_call
 
 def test_function_and_min_choose_the_lines_shown():
     result = {
-        "calls": {"False": {"move": 3, "swap": 1}},
-        "lines": {"False": {"moves.py:move:2": 5, "moves.py:move:4": 50, "cells.py:swap:3": 500}},
+        "calls": {"None": {"move": 3, "swap": 1}},
+        "lines": {"None": {"moves.py:move:2": 5, "moves.py:move:4": 50, "cells.py:swap:3": 500}},
     }
     sources = {"moves.py": [f"line {n}" for n in range(1, 11)], "cells.py": [f"cell {n}" for n in range(1, 11)]}
     shown = lines._report(result, sources, "move", 10)

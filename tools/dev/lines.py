@@ -117,6 +117,9 @@ def _child(job: dict) -> None:
 
         return each_line
 
+    from sandmod.world import world as world_module
+
+    world_module._STEP_COMPILED = True  # the step later runs take, with the fast loop (a first run's quick step has none)
     sys.settrace(each_call)
     try:
         for _ in range(job["frames"]):
@@ -132,7 +135,7 @@ def _report(result: dict, sources: dict[str, list[str]], function: str | None, l
     """For each version: the calls of each function, and the lines run (of ``function``, or all) at least ``least`` times."""
     out = []
     for version in sorted(result["calls"]):
-        label = {"True": "with the fast loop", "False": "without the fast loop"}.get(version, "outside the cells' update")
+        label = {"True": "with the fast loop", "None": "without the fast loop"}.get(version, "outside the cells' update")
         counted = result["calls"][version]
         out.append(f"{label}: calls " + ", ".join(f"{name} {n}" for name, n in sorted(counted.items(), key=lambda item: -item[1])))
         for where, runs in sorted(result["lines"].get(version, {}).items(), key=lambda item: _place(item[0])):
