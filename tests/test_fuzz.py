@@ -101,6 +101,7 @@ def _clean_exit(result) -> None:
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow  # 40 files, over ten seconds
 @SETTINGS
 @given(text=mutated(MOD))
 def test_mutated_mods_validate_cleanly(text):
@@ -110,6 +111,7 @@ def test_mutated_mods_validate_cleanly(text):
     _finished_only("mods")
 
 
+@pytest.mark.slow  # 40 files, over ten seconds
 @SETTINGS
 @given(text=mutated(WORLD))
 def test_mutated_worlds_validate_and_render_cleanly(text):
@@ -208,6 +210,7 @@ names = ["counts", "extent"]
 """
 
 
+@pytest.mark.slow  # 40 files, over ten seconds
 @SETTINGS
 @given(text=mutated(SWEEP))
 def test_mutated_sweeps_are_refused_before_any_run_or_run_whole(text):

@@ -140,7 +140,7 @@ def _speeds(page: str, rows: dict[str, tuple[str, ...]]) -> list[Figure]:
 FIGURES: list[Figure] = [
     # README.md
     fact("README.md", "With Python 3.11 or newer and pip", "3.11", "python_min"),
-    Figure("README.md", "the 31 tests marked slow", "31", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
+    Figure("README.md", "the 34 tests marked slow", "34", "python -m pytest --collect-only -q -m slow -p no:cacheprovider", r"^(\d+)/\d+ tests collected"),
     fact("README.md", "up to 4,096 elements", "4,096", "max_elements"),
     fact("README.md", "(512², 1000 steps", "512", "bench_size"),
     fact("README.md", "(512², 1000 steps", "1000", "bench_steps"),
