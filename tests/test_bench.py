@@ -170,11 +170,12 @@ def test_compiling_the_kernels_runs_every_one_then_notes_the_version(ruleset, tm
     assert not kernelcache.is_compiled()
     said = []
     compile_kernels(ruleset, announce=lambda line: (time.sleep(0.02), said.append(line)))  # slow to say it, as a terminal may be
-    assert sorted(Worker.events) == sorted(("compile", part) for part in warmup.PARTS)
+    assert sorted(Worker.events) == sorted(("compile", part) for part in warmup.PARTS if part not in warmup.ASKED)
     # The quick step here (conduct: compiled by a part, linked by it), then the best step loaded, and the blasts'.
     assert called == ["step_soon", "step", "take_detonations", "explode"]
     assert kernelcache.is_compiled() and not warmup._LATER  # all of it done as it returns, nothing left for later
-    assert any(line.startswith(f"compiling the kernel: {len(warmup.PARTS)} of {len(warmup.PARTS)} parts done") for line in said)
+    parts = len(warmup.PARTS) - len(warmup.ASKED)
+    assert any(line.startswith(f"compiling the kernel: {parts} of {parts} parts done") for line in said)
 
 
 def _until(condition, seconds=60):
@@ -233,10 +234,10 @@ def test_a_first_frame_waits_only_for_the_parts_its_world_uses_and_the_rest_fini
     monkeypatch.setattr(warmup, "_Worker", Slow)
     compile_kernels(ruleset, first_frame_of=world)
     assert not kernelcache.is_compiled() and warmup._LATER  # the first frame need not wait
-    assert {part for _, part in events} >= set(warmup.PARTS) - set(later)
+    assert {part for _, part in events} >= set(warmup.PARTS) - set(later) - set(warmup.ASKED)
     release.set()
     warmup.finish_later()
-    assert kernelcache.is_compiled() and not warmup._LATER and sorted(part for _, part in events) == sorted(warmup.PARTS)
+    assert kernelcache.is_compiled() and not warmup._LATER and sorted(part for _, part in events) == sorted(set(warmup.PARTS) - set(warmup.ASKED))
 
 
 def test_while_the_parts_waited_for_wait_for_theirs_a_worker_compiles_a_later_part(monkeypatch):
@@ -283,6 +284,14 @@ def test_a_first_run_switches_to_the_best_step_once_its_part_is_done(ruleset, tm
     warmup.finish_later()
 
 
+def test_asked_to_the_warmup_compiles_the_kernel_for_several_threads_side_by_side(ruleset, tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # not compiled yet
+    monkeypatch.setattr(warmup, "_several_cpus", lambda: True)
+    monkeypatch.setattr(warmup, "_Worker", Worker := _FakeWorker.recording([]))
+    compile_kernels(ruleset, several_threads=True)
+    assert ("compile", "several threads") in Worker.events and kernelcache.is_compiled()
+
+
 def test_a_part_that_failed_leaves_the_version_not_compiled(ruleset, tmp_path, monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
     Failing = type("Failing", (_FakeWorker.recording([]),), {"failing": ("neighbour rules",)})
@@ -294,10 +303,10 @@ def test_a_part_that_failed_leaves_the_version_not_compiled(ruleset, tmp_path, m
 def test_warmup_compiles_for_one_thread_and_several_and_says_where(tmp_path, monkeypatch):
     called = []
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))  # an empty cache: as on a first run
-    monkeypatch.setattr(warmup, "compile_kernels", lambda announce: called.append("one thread") or 0.0)
+    monkeypatch.setattr(warmup, "compile_kernels", lambda announce, several_threads: called.append(("one thread", several_threads)) or 0.0)
     monkeypatch.setattr(warmup, "compile_parallel", lambda announce: called.append("several"))
     first = CliRunner().invoke(cli, ["warmup"])
-    assert first.exit_code == 0 and called == ["one thread", "several"]
+    assert first.exit_code == 0 and called == [("one thread", True), "several"]  # several side by side with the rest; then loaded
     assert kernelcache.NOTICE in first.stderr and "compiled in" in first.stderr and "cache" in first.stderr.splitlines()[-1]
     assert CliRunner().invoke(cli, ["warmup", "-q"]).stderr == ""
 

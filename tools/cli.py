@@ -803,8 +803,8 @@ def warmup(quiet) -> None:
     if fresh:
         say(kernelcache.NOTICE)
     started = time.perf_counter()
-    compile_kernels(announce=say)
-    fresh = compile_parallel(announce=say) or fresh
+    compile_kernels(announce=say, several_threads=True)
+    fresh = compile_parallel(announce=say) or fresh  # loaded, if the line above compiled it
     done = "compiled" if fresh else "already compiled: loaded"
     say(f"{done} in {time.perf_counter() - started:.1f} s, kept in {display_path(kernelcache.kernel_cache_dir())}")
 

@@ -36,7 +36,8 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     from sandmod.jobs.warmup import compile_new_kernels
 
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
-    compile_new_kernels(announce=None if reporter is None else lambda notice: reporter.write_line(f"sandmod: {notice}"))
+    say = None if reporter is None else lambda notice: reporter.write_line(f"sandmod: {notice}")
+    compile_new_kernels(announce=say, several_threads=True)  # tests run worlds on several threads too
 
 
 def _looks_like_mod(path: Path) -> bool:

@@ -47,6 +47,7 @@ PARTS = {
     "pixels": (),
     "fast loop": ("moves", "phases"),  # kernel._fast_cells, and the update with it: for the best step
     "step": ("cells", "fast loop"),  # the best step: the update inlined, both versions
+    "several threads": ("cells", "fast loop"),  # the step on several threads at once: only where asked (ASKED)
     "blasts": (),
     "taps and sprays": (),
     "neighbour rules": (),
@@ -55,6 +56,9 @@ PARTS = {
 STEP_NEEDS = ("moves", "phases", "cells")
 #: The parts a world may not use as it starts: they may go on compiling while it runs (:func:`unused_at_first`).
 LATER = ("fast loop", "step", "blasts", "taps and sprays", "neighbour rules")
+#: The parts compiled only where :func:`compile_kernels` is asked to (``several_threads``): a command compiles
+#: the kernel for several threads when its world may use them (:func:`compile_parallel`).
+ASKED = ("several threads",)
 
 
 def _tiny_world():
@@ -113,6 +117,9 @@ def compile_part(part: str) -> None:
     elif part == "step":
         world.threads = 1
         kernel.step(*world._step_arguments(1))
+    elif part == "several threads":
+        world.threads = 2
+        world.step()
     elif part == "blasts":
         world._explode(kernel.take_detonations(s, t, world._detonations), 0)
     elif part == "taps and sprays":
@@ -128,11 +135,13 @@ def compile_part(part: str) -> None:
         raise ValueError(f"no part {part!r}")
 
 
-def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = None, *, first_frame_of=None) -> float:
+def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = None, *, first_frame_of=None, several_threads: bool = False) -> float:
     """Compile (or load from the cache) every kernel a world on one thread uses: the
     :data:`PARTS` side by side in processes of their own, then a step of a tiny world of
     ``ruleset`` (default: the bundled mods') here; then note this version as compiled
     (:mod:`sandmod.engine.kernelcache`). ``announce`` hears how far along it is. Returns the seconds.
+    With ``several_threads``, the kernel for several threads too (:data:`ASKED`), side by side with the
+    rest, where there are several CPUs (:func:`compile_parallel` would compile it alone, after).
 
     A world compiles each kernel when it first needs it, so without this the first
     explosion after a new version would stop a render for a while, unannounced. Given a
@@ -146,12 +155,13 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
     say = announce or (lambda line: None)
     world = _tiny_world() if ruleset is None else _world_of(ruleset)
     world.threads = 1
+    parts = [part for part in PARTS if part not in ASKED or (several_threads and _several_cpus())]
     if kernelcache.is_compiled():
         world.step()
     else:
         later = () if first_frame_of is None else unused_at_first(first_frame_of)
-        first = [part for part in PARTS if part not in later]
-        compiling = _Compiling(lambda done: say(f"compiling the kernel: {done} of {len(first)} parts done, {time.perf_counter() - started:.0f} s"), first)
+        first = [part for part in parts if part not in later]
+        compiling = _Compiling(lambda done: say(f"compiling the kernel: {done} of {len(first)} parts done, {time.perf_counter() - started:.0f} s"), first, parts=parts)
         try:
             with compiling.here_after(STEP_NEEDS):  # a step links the cells' parts and heat: here, while the rest compile
                 say("compiling the kernel: putting the parts together...")
@@ -164,7 +174,7 @@ def compile_kernels(ruleset=None, announce: Callable[[str], object] | None = Non
             _LATER.append((compiling, announce))
             return time.perf_counter() - started
         compiling.join()
-    for part in PARTS:  # in the cache by now: loaded, not compiled
+    for part in parts:  # in the cache by now: loaded, not compiled
         if part not in STEP_NEEDS:
             compile_part(part)
     kernelcache.mark_compiled()
@@ -210,7 +220,7 @@ def abandon_later() -> None:
         _LATER.pop()[0].stop()
 
 
-def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None = None, *, first_frame_of=None) -> None:
+def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None = None, *, first_frame_of=None, several_threads: bool = False) -> None:
     """:func:`compile_kernels` if this version's are not compiled yet, first handing
     ``announce`` (when given) the notice to show (:data:`sandmod.engine.kernelcache.NOTICE`), then
     how far along it is."""
@@ -220,15 +230,15 @@ def compile_new_kernels(ruleset=None, announce: Callable[[str], object] | None =
         return
     if announce is not None:
         announce(kernelcache.NOTICE)
-    compile_kernels(ruleset, announce, first_frame_of=first_frame_of)
+    compile_kernels(ruleset, announce, first_frame_of=first_frame_of, several_threads=several_threads)
 
 
 def compile_parallel(world=None, announce: Callable[[str], object] | None = None) -> bool:
     """Compile (or load) the kernel that updates a pass's tiles on several threads at once,
     if ``world`` (any, if None) may step on several; returns whether it compiled it (not cached yet)."""
-    from ..engine.threads import MIN_TILES_A_PASS, available
+    from ..engine.threads import MIN_TILES_A_PASS
 
-    if available() < 2:
+    if not _several_cpus():
         return False
     if world is not None and ((world.threads or 2) < 2 or len(world._detonations) // 4 < MIN_TILES_A_PASS):
         return False
@@ -239,6 +249,12 @@ def compile_parallel(world=None, announce: Callable[[str], object] | None = None
     tiny.threads = 2
     tiny.step()
     return new
+
+
+def _several_cpus() -> bool:
+    from ..engine.threads import available
+
+    return available() >= 2
 
 
 def _world_of(ruleset):
@@ -291,15 +307,16 @@ def _serve() -> None:
 
 
 class _Compiling:
-    """:data:`PARTS` compiling in :class:`_Worker` processes, as many at once as there are CPUs (one
+    """:data:`PARTS` (or those of ``parts``) compiling in :class:`_Worker` processes, as many at once as there are CPUs (one
     fewer while this process compiles too: :meth:`here_after`), each part once those it waits for are
     done, the parts of ``told`` first (others while none of those is ready). ``progress`` hears how many of ``told`` are done, each time
     one of them is."""
 
-    def __init__(self, progress: Callable[[int], object], told, worker: Callable[[], _Worker] | None = None) -> None:
+    def __init__(self, progress: Callable[[int], object], told, worker: Callable[[], _Worker] | None = None, parts=None) -> None:
         self._progress, self._told, self._worker = progress, set(told), worker or _Worker
-        self._most = max(1, min(os.cpu_count() or 1, len(PARTS)))
-        self._waiting = list(PARTS)
+        self._parts = list(PARTS if parts is None else parts)
+        self._most = max(1, min(os.cpu_count() or 1, len(self._parts)))
+        self._waiting = list(self._parts)
         self._finished: dict[str, bool] = {}  # whether each part compiled
         self._compiling = 0
         self._here_after: set[str] | None = None  # this process compiles once these are done (here_after)
@@ -375,7 +392,7 @@ class _Compiling:
 
     def succeeded(self) -> bool:
         """Whether every part compiled."""
-        return self._finished.keys() == PARTS.keys() and all(self._finished.values())
+        return self._finished.keys() == set(self._parts) and all(self._finished.values())
 
     def join(self) -> None:
         for thread in self._threads:
