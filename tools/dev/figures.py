@@ -147,7 +147,7 @@ FIGURES: list[Figure] = [
     Figure("README.md", "# {'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}",
            "{'base:empty': 8968, 'base:stone': 794, 'sand:sand': 1503, 'water:water': 1135}", README_PYTHON, r"^(\{.*\})$"),
     measured("README.md", "kernel (its first frame after 17 s on two idle cores", "17", FIRST, FIRST_FRAME, 0),
-    measured("README.md", "This takes four to five minutes on two cores", "four to five", PYTEST.format(""), r"^took (.*)$"),
+    measured("README.md", "This takes about five minutes on two cores", "about five", PYTEST.format(""), r"^took (.*)$"),
     measured("README.md", "about\nseven minutes more", "about\nseven", PYTEST.format("-m slow"), r"^took (.*)$"),
     *_speeds("README.md", {"mix": ("a quarter water) | 215", "215", "| 267 | `python tools/dev/bench.py", "267"),
                            "halves": ("every cell full) | 139", "139", "| 203 | `... --scene halves", "203"),
