@@ -194,6 +194,17 @@ class _FakeWorker:
     def recording(cls, events):
         return type("Worker", (cls,), {"events": events})
 
+    @classmethod
+    def holding(cls, events, parts, release):
+        """One that records into ``events`` and holds each of ``parts`` until ``release`` is set."""
+
+        def compile(self, part):
+            if part in parts:
+                release.wait(300)
+            return cls.compile(self, part)
+
+        return type("Worker", (cls,), {"events": events, "compile": compile})
+
     def compile(self, part):
         self.events.append(("compile", part))
         return part not in getattr(self, "failing", ())
@@ -225,13 +236,8 @@ def test_a_first_frame_waits_only_for_the_parts_its_world_uses_and_the_rest_fini
     assert "taps and sprays" in later and "blasts" not in later  # the bundled rules have explosives
     events, release = [], threading.Event()
 
-    class Slow(_FakeWorker.recording(events)):
-        def compile(self, part):
-            if part in later:
-                release.wait(300)  # still compiling when the first frame may start (a step may compile for a while here)
-            return super().compile(part)
-
-    monkeypatch.setattr(warmup, "_Worker", Slow)
+    # Still compiling when the first frame may start (a step may compile for a while here).
+    monkeypatch.setattr(warmup, "_Worker", _FakeWorker.holding(events, later, release))
     compile_kernels(ruleset, first_frame_of=world)
     assert not kernelcache.is_compiled() and warmup._LATER  # the first frame need not wait
     assert {part for _, part in events} >= set(warmup.PARTS) - set(later) - set(warmup.ASKED)
@@ -244,14 +250,8 @@ def test_while_the_parts_waited_for_wait_for_theirs_a_worker_compiles_a_later_pa
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
     events, release = [], threading.Event()
 
-    class Slow(_FakeWorker.recording(events)):
-        def compile(self, part):
-            if part == "moves":
-                release.wait(300)
-            return super().compile(part)
-
     first = [part for part in warmup.PARTS if part not in warmup.LATER]
-    compiling = warmup._Compiling(lambda done: None, first, worker=Slow)
+    compiling = warmup._Compiling(lambda done: None, first, worker=_FakeWorker.holding(events, ("moves",), release))
     _until(lambda: ("compile", "blasts") in events)
     waiting = list(events)
     release.set()
@@ -269,13 +269,7 @@ def test_a_first_run_switches_to_the_best_step_once_its_part_is_done(ruleset, tm
     monkeypatch.setattr(world_module, "_STEP_COMPILED", False)
     events, release = [], threading.Event()
 
-    class Slow(_FakeWorker.recording(events)):
-        def compile(self, part):
-            if part == "step":
-                release.wait(300)
-            return super().compile(part)
-
-    monkeypatch.setattr(warmup, "_Worker", Slow)
+    monkeypatch.setattr(warmup, "_Worker", _FakeWorker.holding(events, ("step",), release))
     compile_kernels(ruleset, first_frame_of=World(ruleset, 64, 64))
     assert world_module._serial_step(kernel) is kernel.step_soon
     release.set()
